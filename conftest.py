@@ -1,0 +1,51 @@
+"""Shared pytest fixtures: a live, isolated roscore for the Python suites."""
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import tempfile
+import time
+from typing import Iterator
+
+import pytest
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_for(predicate, timeout: float = 10.0, interval: float = 0.05, what: str = "condition") -> None:
+    """Poll `predicate` until it returns truthy; fail the test after `timeout` seconds."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(interval)
+    raise AssertionError(f"timed out after {timeout}s waiting for {what}")
+
+
+@pytest.fixture(scope="session")
+def roscore() -> Iterator[str]:
+    """Start a roscore on a free port; export ROS_MASTER_URI for the session; yield the URI."""
+    import rosgraph
+
+    port = free_port()
+    uri = f"http://127.0.0.1:{port}"
+    home = tempfile.mkdtemp(prefix="roshome-")
+    env = dict(os.environ, ROS_MASTER_URI=uri, ROS_HOSTNAME="127.0.0.1", ROS_HOME=home, ROS_LOG_DIR=home)
+    proc = subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    os.environ.update(ROS_MASTER_URI=uri, ROS_HOSTNAME="127.0.0.1", ROS_HOME=home, ROS_LOG_DIR=home)
+    try:
+        wait_for(lambda: rosgraph.is_master_online(uri), 15, what="roscore")
+        yield uri
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)

@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Idempotent install step shared by `npm start` and `npm test`.
+# Each stage is skipped when its inputs have not changed since it last succeeded (stamps in .state/).
+set -euo pipefail
+ROOT="$(cd "$(dirname "$0")/.." && pwd)"
+cd "$ROOT"
+STATE="$ROOT/.state"
+mkdir -p "$STATE"
+log() { printf '[bootstrap] %s\n' "$*" >&2; }
+t0=$(date +%s)
+
+APT_PACKAGES=(ros-core python3-rospy python3-roslaunch python3-rosnode python3-rosservice python3-rostopic
+  python3-rosmsg python3-rosparam python3-rosgraph python3-std-msgs python3-std-srvs python3-sensor-msgs
+  python3-geometry-msgs python3-actionlib python3-actionlib-msgs ros-actionlib-msgs python3-catkin
+  ros-message-generation libstd-msgs-dev libsensor-msgs-dev libgeometry-msgs-dev libstd-srvs-dev
+  python3-venv python3-pykdl chromium fonts-dejavu-core openssl)
+
+# Stamp = hash of the files that define a stage; the stage reruns when they change.
+stamp_of() { cat "$@" 2>/dev/null | sha256sum | cut -c1-16; }
+fresh() { [[ -f "$STATE/$1" && "$(cat "$STATE/$1")" == "$2" ]]; }
+mark() { echo "$2" > "$STATE/$1"; }
+
+# 1. Debian packages
+missing=()
+for p in "${APT_PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  log "installing Debian packages: ${missing[*]}"
+  SUDO=""; [[ $(id -u) -ne 0 ]] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# 2. Python venv that still sees Debian's rospy
+if [[ ! -x .venv/bin/python ]]; then
+  log "creating .venv"
+  /usr/bin/python3 -m venv --system-site-packages .venv
+fi
+s=$(stamp_of requirements.txt)
+if ! fresh pip "$s"; then
+  log "pip install -r requirements.txt"
+  .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt
+  mark pip "$s"
+fi
+
+# 3. npm packages
+s=$(stamp_of package-lock.json)
+if ! fresh npm "$s" || [[ ! -d node_modules ]]; then
+  log "npm ci"
+  PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --no-audit --no-fund --loglevel=error
+  mark npm "$s"
+fi
+
+# 4. catkin workspace (msg/srv/action generation, python paths)
+s=$( (find ros_backend/src -type f \( -name '*.msg' -o -name '*.srv' -o -name '*.action' -o -name CMakeLists.txt -o -name package.xml -o -name setup.py \) | sort | xargs cat) | sha256sum | cut -c1-16)
+if ! fresh catkin "$s" || [[ ! -f ros_backend/devel/setup.bash ]]; then
+  log "catkin_make"
+  (cd ros_backend && ROS_LANG_DISABLE=gencpp:genlisp:geneus:gennodejs \
+    catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=OFF >"$STATE/catkin.log" 2>&1) \
+    || { tail -40 "$STATE/catkin.log" >&2; exit 1; }
+  mark catkin "$s"
+fi
+
+# 5. the PWA build
+s=$( (find app/src app/static -type f 2>/dev/null | sort | xargs cat; cat app/package.json app/vite.config.* app/svelte.config.* 2>/dev/null) | sha256sum | cut -c1-16)
+if [[ -f app/package.json ]] && { ! fresh app "$s" || [[ ! -f app/build/index.html ]]; }; then
+  log "building app"
+  npm run build -w app --silent >"$STATE/app-build.log" 2>&1 || { tail -40 "$STATE/app-build.log" >&2; exit 1; }
+  mark app "$s"
+fi
+
+log "ready in $(( $(date +%s) - t0 )) s"
