@@ -12,8 +12,8 @@ t0=$(date +%s)
 APT_PACKAGES=(ros-core python3-rospy python3-roslaunch python3-rosnode python3-rosservice python3-rostopic
   python3-rosmsg python3-rosparam python3-rosgraph python3-std-msgs python3-std-srvs python3-sensor-msgs
   python3-geometry-msgs python3-actionlib python3-actionlib-msgs ros-actionlib-msgs python3-catkin
-  ros-message-generation libstd-msgs-dev libsensor-msgs-dev libgeometry-msgs-dev libstd-srvs-dev
-  python3-venv python3-pykdl chromium fonts-dejavu-core openssl)
+  ros-message-generation libstd-msgs-dev libsensor-msgs-dev libgeometry-msgs-dev libstd-srvs-dev libactionlib-msgs-dev
+  python3-tornado python3-websockets python3-venv python3-pykdl chromium fonts-dejavu-core openssl)
 
 # Stamp = hash of the files that define a stage; the stage reruns when they change.
 stamp_of() { cat "$@" 2>/dev/null | sha256sum | cut -c1-16; }

@@ -1,0 +1,97 @@
+// The /ros relay's transport: cookie authentication on upgrade, frames both ways, sockets closed on logout.
+// A plain WebSocket server stands in for rosbridge here; the real one is exercised by the e2e suite.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { WebSocketServer, WebSocket } from 'ws';
+import { startBff, login } from './helpers.js';
+
+let t; let upstream; let upstreamFrames;
+before(async () => {
+  upstreamFrames = [];
+  upstream = new WebSocketServer({ port: 0, host: '127.0.0.1' });
+  await new Promise((r) => upstream.on('listening', r));
+  upstream.on('connection', (ws) => ws.on('message', (d, bin) => {
+    upstreamFrames.push(d.toString());
+    ws.send(JSON.stringify({ op: 'publish', topic: '/echo', msg: { data: d.toString() } }));
+    if (bin) ws.send(d, { binary: true });
+  }));
+  t = await startBff({ ROSBRIDGE_PORT: String(upstream.address().port) });
+});
+after(async () => { await t.stop(); upstream.close(); });
+
+const wsUrl = () => t.base.replace('http', 'ws') + '/ros';
+
+function upgradeStatus(headers = {}) {
+  return new Promise((resolve) => {
+    const ws = new WebSocket(wsUrl(), { headers });
+    ws.on('unexpected-response', (_req, res) => resolve(res.statusCode));
+    ws.on('open', () => { ws.close(); resolve(101); });
+    ws.on('error', () => {});
+  });
+}
+
+function open(cookie) {
+  return new Promise((resolve, reject) => {
+    const ws = new WebSocket(wsUrl(), { headers: { cookie } });
+    const inbox = [];
+    ws.on('message', (d) => inbox.push(d.toString()));
+    ws.on('open', () => resolve({ ws, inbox }));
+    ws.on('error', reject);
+  });
+}
+
+async function until(pred, ms = 3000) {
+  const end = Date.now() + ms;
+  while (!pred()) {
+    if (Date.now() > end) throw new Error('timed out');
+    await new Promise((r) => setTimeout(r, 20));
+  }
+}
+
+test('no cookie or a bad token: the upgrade is refused with 401', async () => {
+  assert.equal(await upgradeStatus(), 401);
+  assert.equal(await upgradeStatus({ cookie: 'cell_session=not.a.jwt' }), 401);
+});
+
+test('a foreign Origin is refused with 403', async () => {
+  const { cookie } = await login(t.base, 'operator', t.passwords.operator);
+  assert.equal(await upgradeStatus({ cookie, origin: 'http://evil.example' }), 403);
+});
+
+test('frames are relayed both ways, binary stays binary', async () => {
+  const { cookie } = await login(t.base, 'operator', t.passwords.operator);
+  const { ws, inbox } = await open(cookie);
+  ws.send(JSON.stringify({ op: 'subscribe', topic: '/cell/mode' }));
+  await until(() => inbox.length >= 1);
+  assert.ok(upstreamFrames.includes('{"op":"subscribe","topic":"/cell/mode"}'));
+  assert.equal(JSON.parse(inbox[0]).msg.data, '{"op":"subscribe","topic":"/cell/mode"}');
+  const bin = await new Promise((resolve) => {
+    ws.once('message', () => ws.once('message', (d, isBinary) => resolve({ d, isBinary })));
+    ws.send(Buffer.from([0xa1, 0x62, 0x6f, 0x70]), { binary: true });
+  });
+  assert.equal(bin.isBinary, true);
+  assert.deepEqual([...bin.d], [0xa1, 0x62, 0x6f, 0x70]);
+  ws.close();
+});
+
+test('logout closes the open socket and the old cookie no longer opens /ros', async () => {
+  const { cookie } = await login(t.base, 'admin', t.passwords.admin);
+  const { ws } = await open(cookie);
+  const closed = new Promise((r) => ws.on('close', (code) => r(code)));
+  await fetch(`${t.base}/api/auth/logout`, { method: 'POST', headers: { cookie } });
+  assert.equal(await closed, 4001);
+  assert.equal(await upgradeStatus({ cookie }), 401);
+});
+
+test('when rosbridge is down the browser socket is closed, and the BFF keeps serving', async () => {
+  const dead = await startBff({ ROSBRIDGE_PORT: '1' });
+  try {
+    const { cookie } = await login(dead.base, 'operator', dead.passwords.operator);
+    const ws = new WebSocket(dead.base.replace('http', 'ws') + '/ros', { headers: { cookie } });
+    const code = await new Promise((r) => ws.on('close', (c) => r(c)));
+    assert.equal(code, 1011);
+    assert.equal((await fetch(`${dead.base}/api/health`)).status, 200);
+  } finally {
+    await dead.stop();
+  }
+});
