@@ -111,6 +111,12 @@ async function waitUntil(pred, ms) {
 
 process.on('SIGINT', () => shutdown(0));
 process.on('SIGTERM', () => shutdown(0));
+process.on('SIGHUP', () => shutdown(0));
+// Whatever goes wrong in the supervisor itself, the children must not outlive it.
+process.on('uncaughtException', (e) => { console.error(`[stack] ${e.stack || e}`); shutdown(1); });
+process.stdout.on('error', () => shutdown(1));
+const parent = process.ppid;
+setInterval(() => { if (process.ppid !== parent) shutdown(1); }, 500).unref();
 
 async function main() {
   let cell;
@@ -136,9 +142,17 @@ async function main() {
   }
   startRos('ros', `roslaunch --wait cell_bringup cell.launch cell_config:=${shellQuote(env.cellConfig)} rosbridge_port:=${env.rosbridgePort}`);
   start('bff', process.execPath, [path.join(REPO_ROOT, 'bff/src/server.js')]);
-  await waitFor(async () => {
-    try { return (await fetch(`http://127.0.0.1:${env.port}/api/health`)).ok; } catch { return false; }
-  }, 30000, 'the BFF');
+  /** @returns {Promise<any>} */
+  const health = async () => {
+    try { const r = await fetch(`http://127.0.0.1:${env.port}/api/health`); return r.ok ? await r.json() : null; } catch { return null; }
+  };
+  await waitFor(async () => !!(await health()), 30000, 'the BFF');
+  try {
+    await waitFor(async () => (await health())?.ros?.rosbridge === true, 30000, 'rosbridge');
+  } catch (e) {
+    if (stopping) throw e;
+    log('warning: rosbridge does not answer yet; the app will connect when it does');
+  }
   const lan = Object.values(os.networkInterfaces()).flat().find((i) => i && i.family === 'IPv4' && !i.internal);
   log(`ready: http://localhost:${env.port}/${lan ? `  (on the network: http://${lan.address}:${env.port}/)` : ''}`);
 }

@@ -83,15 +83,24 @@ test('logout closes the open socket and the old cookie no longer opens /ros', as
   assert.equal(await upgradeStatus({ cookie }), 401);
 });
 
-test('when rosbridge is down the browser socket is closed, and the BFF keeps serving', async () => {
+test('when rosbridge is down the upgrade is refused with 502, and the BFF keeps serving', async () => {
   const dead = await startBff({ ROSBRIDGE_PORT: '1' });
   try {
     const { cookie } = await login(dead.base, 'operator', dead.passwords.operator);
     const ws = new WebSocket(dead.base.replace('http', 'ws') + '/ros', { headers: { cookie } });
-    const code = await new Promise((r) => ws.on('close', (c) => r(c)));
-    assert.equal(code, 1011);
+    ws.on('error', () => {});
+    const status = await new Promise((r) => ws.on('unexpected-response', (_q, res) => r(res.statusCode)));
+    assert.equal(status, 502);
     assert.equal((await fetch(`${dead.base}/api/health`)).status, 200);
   } finally {
     await dead.stop();
   }
+});
+
+test('when rosbridge goes away the browser socket closes', async () => {
+  const { cookie } = await login(t.base, 'operator', t.passwords.operator);
+  const { ws } = await open(cookie);
+  const closed = new Promise((r) => ws.on('close', (code) => r(code)));
+  for (const c of upstream.clients) c.terminate();
+  assert.equal(await closed, 1012);
 });

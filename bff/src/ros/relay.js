@@ -31,44 +31,57 @@ export class RosRelay {
     this.timer.unref();
   }
 
-  /** @param {import('node:http').IncomingMessage} req @param {import('node:stream').Duplex} socket @param {Buffer} head */
+  /**
+   * The browser's socket opens only once rosbridge answers, so "connected" in the app means connected to ROS;
+   * with rosbridge down the upgrade is refused with 502 and the app retries with backoff.
+   * @param {import('node:http').IncomingMessage} req @param {import('node:stream').Duplex} socket @param {Buffer} head
+   */
   handleUpgrade(req, socket, head) {
     if (!this.checkOrigin(req)) return refuse(socket, 403, 'Forbidden');
     const session = this.authenticate(req);
     if (!session) return refuse(socket, 401, 'Unauthorized');
-    this.wss.handleUpgrade(req, socket, head, (ws) => this.bridge(ws, session, req));
+    const up = new WebSocket(this.upstreamUrl, { perMessageDeflate: false, maxPayload: 64 * 1024 * 1024 });
+    const early = [];
+    const onEarly = (d, b) => early.push([d, b]);
+    up.on('message', onEarly);
+    up.once('error', (e) => {
+      this.log(`rosbridge unavailable for ${session.username}: ${e.message}`);
+      refuse(socket, 502, 'Bad Gateway');
+    });
+    socket.once('close', () => { if (up.readyState === WebSocket.CONNECTING) up.terminate(); });
+    up.once('open', () => {
+      if (socket.destroyed) { up.close(); return; }
+      this.wss.handleUpgrade(req, socket, head, (ws) => {
+        up.off('message', onEarly);
+        this.bridge(ws, up, session, req);
+        for (const [d, b] of early) ws.send(d, { binary: b });
+      });
+    });
   }
 
-  /** @param {WebSocket} ws @param {Session} session @param {import('node:http').IncomingMessage} req */
-  bridge(ws, session, req) {
+  /** @param {WebSocket} ws @param {WebSocket} up @param {Session} session @param {import('node:http').IncomingMessage} req */
+  bridge(ws, up, session, req) {
     this.clients.set(ws, session);
-    const up = new WebSocket(this.upstreamUrl, { perMessageDeflate: false, maxPayload: 64 * 1024 * 1024 });
-    /** @type {[Buffer, boolean][]} */
-    const pending = [];
+    up.removeAllListeners('error');
     const closeBoth = (code, reason) => {
       this.clients.delete(ws);
       if (ws.readyState === WebSocket.OPEN || ws.readyState === WebSocket.CONNECTING) ws.close(code, reason);
       if (up.readyState === WebSocket.OPEN) up.close();
       else if (up.readyState === WebSocket.CONNECTING) up.terminate();
     };
-    up.on('open', () => {
-      for (const [d, b] of pending.splice(0)) up.send(d, { binary: b });
-    });
     up.on('message', (data, isBinary) => {
       if (ws.readyState === WebSocket.OPEN) ws.send(data, { binary: isBinary });
     });
     up.on('close', () => closeBoth(1012, 'rosbridge closed'));
     up.on('error', (e) => {
       this.log(`rosbridge upstream error for ${session.username}: ${e.message}`);
-      closeBoth(1011, 'rosbridge unavailable');
+      closeBoth(1011, 'rosbridge error');
     });
     ws.on('message', (raw, isBinary) => {
       const data = /** @type {Buffer} */ (Array.isArray(raw) ? Buffer.concat(raw) : Buffer.from(/** @type {any} */ (raw)));
       const verdict = this.inspect(session, data, isBinary);
       if (verdict.reply && ws.readyState === WebSocket.OPEN) ws.send(verdict.reply);
-      if (!verdict.forward) return;
-      if (up.readyState === WebSocket.OPEN) up.send(data, { binary: isBinary });
-      else if (up.readyState === WebSocket.CONNECTING && pending.length < 1000) pending.push([data, isBinary]);
+      if (verdict.forward && up.readyState === WebSocket.OPEN) up.send(data, { binary: isBinary });
     });
     ws.on('close', () => closeBoth(1000, ''));
     ws.on('error', () => closeBoth(1011, ''));

@@ -1,0 +1,39 @@
+// Talking to the stack's ROS side from tests, as an engineer would from a terminal.
+import { execFile } from 'node:child_process';
+import { promisify } from 'node:util';
+import { REPO_ROOT } from './stack.js';
+
+const run = promisify(execFile);
+
+/** Run a ROS command line tool in the project's ROS environment against the e2e stack's master. */
+export function rosCli(command) {
+  return run('bash', ['-c', `source scripts/ros-env.sh && ${command}`], {
+    cwd: REPO_ROOT, env: { ...process.env, ROS_MASTER_URI: process.env.E2E_ROS_MASTER_URI }, timeout: 30_000,
+  });
+}
+
+/** @param {string} mode */
+export function publishMode(mode) {
+  return rosCli(`rostopic pub -1 /cell/mode cell_msgs/OperationMode "{mode: ${mode}, source: e2e}"`);
+}
+
+/** XML-RPC call with string arguments; returns the raw response body. */
+async function xmlrpc(uri, method, ...args) {
+  const params = args.map((a) => `<param><value><string>${a}</string></value></param>`).join('');
+  const res = await fetch(uri, { method: 'POST', headers: { 'content-type': 'text/xml' },
+    body: `<?xml version="1.0"?><methodCall><methodName>${method}</methodName><params>${params}</params></methodCall>` });
+  return res.text();
+}
+
+/** The pid of a ROS node, asked from the master and the node itself. @param {string} node */
+export async function nodePid(node) {
+  const lookup = await xmlrpc(process.env.E2E_ROS_MASTER_URI, 'lookupNode', '/e2e', node);
+  const uri = lookup.match(/<string>(https?:\/\/[^<]+)<\/string>/)?.[1];
+  if (!uri) return null;
+  try {
+    const pid = (await xmlrpc(uri, 'getPid', '/e2e')).match(/<(?:int|i4)>(\d+)<\/(?:int|i4)>/)?.[1];
+    return pid ? Number(pid) : null;
+  } catch {
+    return null;
+  }
+}

@@ -1,0 +1,36 @@
+// Playwright against the whole stack (roscore, rosbridge, ROS nodes, BFF, built PWA) on isolated ports,
+// in Debian's Chromium with phone, tablet and desktop profiles.
+import { defineConfig, devices } from '@playwright/test';
+
+const chromium = {
+  browserName: /** @type {const} */ ('chromium'),
+  launchOptions: {
+    executablePath: process.env.CHROMIUM_PATH || '/usr/bin/chromium',
+    args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--disable-background-networking',
+      '--disable-component-update', '--disable-sync', '--no-first-run'],
+  },
+};
+
+export default defineConfig({
+  testDir: './tests',
+  // The tests share one stack whose ROS state (mode, rosbridge process) they change: one at a time.
+  workers: 1,
+  fullyParallel: false,
+  retries: 0,
+  timeout: 60_000,
+  expect: { timeout: 15_000 },
+  reporter: process.env.CI ? [['list']] : [['list']],
+  globalSetup: './lib/global-setup.js',
+  globalTeardown: './lib/global-teardown.js',
+  use: {
+    baseURL: `http://localhost:${process.env.E2E_PORT || 18080}`,
+    serviceWorkers: 'allow',
+    trace: 'off',
+    screenshot: 'only-on-failure',
+  },
+  projects: [
+    { name: 'phone', use: { ...devices['Pixel 7'], ...chromium } },
+    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium } },
+    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium } },
+  ],
+});

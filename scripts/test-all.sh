@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Every suite, in order of speed: BFF unit, app unit, Python (unit + integration on live roscores),
+# the supervisor, then Playwright end to end against the whole stack. Stops at the first failing suite.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1
+t0=$(date +%s)
+step() { printf '\n=== %s ===\n' "$*"; }
+
+step "bff (node:test)"
+npm test -w bff --silent
+
+step "app (vitest)"
+npm test -w app --silent
+
+step "ros_backend + sim (pytest, live roscore)"
+( source scripts/ros-env.sh && python -m pytest -q )
+
+step "stack supervisor (node:test)"
+node --test --test-concurrency=1 scripts/test/*.test.js
+
+step "e2e (Playwright: phone, tablet, desktop)"
+npm test -w e2e --silent
+
+printf '\nall suites passed in %s s\n' "$(( $(date +%s) - t0 ))"

@@ -1,0 +1,41 @@
+// `npm start`'s supervisor: a whole stack comes up on isolated ports, SIGINT/SIGTERM stop every process it
+// started within 5 s with no orphans, and a second start right after works.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import net from 'node:net';
+import { stackEnv, addUser, startStack, stopStack, pidsOfStack } from '../../e2e/lib/stack.js';
+
+const portFree = (port) => new Promise((resolve) => {
+  const s = net.createServer().once('error', () => resolve(false)).listen(port, '127.0.0.1', () => s.close(() => resolve(true)));
+});
+
+for (const signal of ['SIGINT', 'SIGTERM']) {
+  test(`start, serve, stop on ${signal} within 5 s with nothing left behind, start again`, { timeout: 240_000 }, async (t) => {
+    const base = signal === 'SIGINT' ? 28080 : 28180;
+    const env = stackEnv({ port: base, masterPort: base + 1, rosbridgePort: base + 2, extraEnv: { UR_SIM: '0' } });
+    addUser(env, 'admin', 'admin', 'admin-password');
+    for (let round = 1; round <= 2; round++) {
+      const stack = await startStack(env);
+      t.after(() => stopStack(stack.proc));
+      const health = await (await fetch(`http://127.0.0.1:${base}/api/health`)).json();
+      assert.deepEqual(health.ros, { master: true, rosbridge: true }, `round ${round}`);
+      const before = pidsOfStack(env.DATA_DIR);
+      assert.ok(before.length >= 5, `roscore, rosmaster, rosout, roslaunch, nodes, BFF: saw ${before.length}`);
+
+      const t0 = Date.now();
+      const exited = new Promise((r) => stack.proc.once('exit', r));
+      stack.proc.kill(signal);
+      await exited;
+      const took = (Date.now() - t0) / 1000;
+      assert.ok(took < 5, `stopped in ${took} s`);
+      assert.deepEqual(pidsOfStack(env.DATA_DIR), [], 'no process of the stack is left');
+      for (const p of [base, base + 1, base + 2]) assert.ok(await portFree(p), `port ${p} is free again`);
+    }
+  });
+}
+
+test('a bad cell file stops the start with the field named and exit code 2', { timeout: 60_000 }, async () => {
+  const env = stackEnv({ port: 28280, masterPort: 28281, rosbridgePort: 28282, extraEnv: { CELL_CONFIG: '/nonexistent/cell.yaml' } });
+  await assert.rejects(startStack(env, 20_000), /cannot read: ENOENT[\s\S]*exited \(2\)|exited \(2\)[\s\S]*cannot read/);
+  assert.deepEqual(pidsOfStack(env.DATA_DIR), []);
+});
