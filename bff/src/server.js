@@ -1,7 +1,7 @@
 // The BFF process: HTTP server + /ros upgrade. Exits non-zero with a clear message on a bad cell file.
 import http from 'node:http';
 import { readEnv } from './config/env.js';
-import { createBff } from './app.js';
+import { createBff, StartupError } from './app.js';
 import { CellConfigError } from './config/cell.js';
 
 const env = readEnv();
@@ -9,7 +9,7 @@ let bff;
 try {
   bff = await createBff(env);
 } catch (e) {
-  if (e instanceof CellConfigError) {
+  if (e instanceof CellConfigError || e instanceof StartupError) {
     console.error(e.message);
     process.exit(2);
   }

@@ -74,13 +74,20 @@ test('tokens: valid ones pass; forged, expired, alg:none, wrong-key and revoked 
   assert.equal(svc.verify(`${h}.${forgedPayload}.${good.split('.')[2]}`), null, 'tampered payload');
   const none = `${Buffer.from('{"alg":"none","typ":"JWT"}').toString('base64url')}.${p}.`;
   assert.equal(svc.verify(none), null, 'alg none');
-  assert.equal(svc.verify(jwt.sign({ role: 'admin', jti: 'x' }, 'other-key', { subject: 'alice' })), null, 'wrong key');
-  const expired = jwt.sign({ role: 'operator', jti: 'y', exp: Math.floor(Date.now() / 1000) - 10 }, key, { subject: 'alice' });
+  const wellFormed = { role: 'admin', sid: 's1', jti: 'x' };
+  assert.ok(svc.verify(jwt.sign(wellFormed, key, { subject: 'alice' })), 'control: a well-formed token with our key passes');
+  assert.equal(svc.verify(jwt.sign(wellFormed, 'other-key', { subject: 'alice' })), null, 'wrong key');
+  const expired = jwt.sign({ ...wellFormed, exp: Math.floor(Date.now() / 1000) - 10 }, key, { subject: 'alice' });
   assert.equal(svc.verify(expired), null, 'expired');
-  assert.equal(svc.verify(jwt.sign({ role: 'operator' }, key, { subject: 'alice', algorithm: 'HS512' })), null, 'other algorithm');
+  assert.equal(svc.verify(jwt.sign(wellFormed, key, { subject: 'alice', algorithm: 'HS512' })), null, 'other algorithm');
+  const noneAlg = jwt.sign(wellFormed, null, { subject: 'alice', algorithm: 'none' });
+  assert.equal(svc.verify(noneAlg), null, 'alg none from jsonwebtoken itself');
 
+  const renewed = svc.issue({ username: 'alice', role: 'operator' }, claims.sid);
+  assert.equal(svc.verify(renewed).sid, claims.sid, 'renewal keeps the session id');
   svc.revoke(claims);
   assert.equal(svc.verify(good), null, 'revoked');
+  assert.equal(svc.verify(renewed), null, 'logout kills every token of the session');
   const again = new TokenService({ key, ttlS: 60, revoked: new RevocationList(path.join(dir, 'revoked.json')) });
   assert.equal(again.verify(good), null, 'revocation survives a restart');
 });

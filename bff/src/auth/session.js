@@ -8,7 +8,7 @@ export const COOKIE = 'cell_session';
  * @param {import('node:http').IncomingMessage} req
  * @param {import('./tokens.js').TokenService} tokens
  * @param {import('./users.js').UserStore} users
- * @returns {null | {username: string, role: string, claims: import('./tokens.js').Claims}}
+ * @returns {null | {username: string, role: string, sid: string, claims: import('./tokens.js').Claims}}
  */
 export function sessionOf(req, tokens, users) {
   const jar = cookie.parse(req.headers.cookie || '');
@@ -16,7 +16,7 @@ export function sessionOf(req, tokens, users) {
   if (!claims) return null;
   const u = users.get(claims.sub);
   if (!u || u.role !== claims.role) return null;
-  return { username: u.username, role: u.role, claims };
+  return { username: u.username, role: u.role, sid: claims.sid, claims };
 }
 
 /** @param {import('express').Response} res @param {string} token @param {boolean} secure @param {number} maxAgeS */

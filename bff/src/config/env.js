@@ -33,7 +33,7 @@ export function readEnv(e = process.env) {
     usersFile: path.resolve(e.USERS_FILE || path.join(dataDir, 'users.json')),
     urHost: e.UR_HOST || '127.0.0.1',
     appDir: path.resolve(e.APP_DIR || path.join(REPO_ROOT, 'app/build')),
-    tokenTtlS: int(e.SESSION_TTL_S, 8 * 3600),
+    tokenTtlS: int(e.SESSION_TTL_S, 30 * 60),
   };
 }
 

@@ -11,6 +11,7 @@ const health = {
     ros: { type: 'object', properties: { master: { type: 'boolean' }, rosbridge: { type: 'boolean' } } },
   },
 };
+const lease = { type: 'object', required: ['holder', 'you'], properties: { holder: { type: ['object', 'null'] }, you: { type: 'boolean' } } };
 const unauthorized = { description: 'Not logged in', ...json(error) };
 const forbidden = { description: 'Role may not', ...json(error) };
 
@@ -46,6 +47,29 @@ export const openapi = {
     '/api/system': {
       get: { summary: 'System overview (admin): health, cell file, users', security: [{ session: [] }], responses: { 200: { description: 'Overview', ...json({ type: 'object' }) }, 401: unauthorized, 403: forbidden } },
     },
+    '/api/control': {
+      get: { summary: 'Who holds control of motion', security: [{ session: [] }], responses: { 200: { description: 'Lease state', ...json(lease) }, 401: unauthorized } },
+    },
+    '/api/control/take': {
+      post: {
+        summary: 'Take control of motion (admins may take it over with force)', security: [{ session: [] }],
+        requestBody: { required: false, ...json({ type: 'object', additionalProperties: false, properties: { force: { type: 'boolean' } } }) },
+        responses: { 200: { description: 'You hold control', ...json(lease) }, 401: unauthorized, 409: { description: 'Held by someone else', ...json(error) } },
+      },
+    },
+    '/api/control/heartbeat': {
+      post: { summary: 'Keep control (send about every 500 ms; lost after the cell file\'s heartbeat timeout)', security: [{ session: [] }], responses: { 200: { description: 'Still yours', ...json(lease) }, 401: unauthorized, 409: { description: 'Not yours', ...json(error) } } },
+    },
+    '/api/control/release': {
+      post: { summary: 'Give control back', security: [{ session: [] }], responses: { 204: { description: 'Released' }, 401: unauthorized } },
+    },
+    '/api/audit': {
+      get: {
+        summary: 'Audit log, newest first (System page roles)', security: [{ session: [] }],
+        parameters: ['user', 'op', 'outcome', 'since', 'offset', 'limit'].map((name) => ({ name, in: 'query', required: false, schema: { type: 'string' } })),
+        responses: { 200: { description: 'A page of entries', ...json({ type: 'object', required: ['total', 'entries'], properties: { total: { type: 'integer' }, offset: { type: 'integer' }, limit: { type: 'integer' }, entries: { type: 'array' } } }) }, 401: unauthorized, 403: forbidden },
+      },
+    },
     '/api/openapi.json': {
       get: { summary: 'This document', security: [], responses: { 200: { description: 'OpenAPI 3.1 document', ...json({ type: 'object' }) } } },
     },
@@ -60,16 +84,19 @@ export function validateRequests() {
   const ajv = new Ajv2020({ allErrors: true, strict: false });
   /** @type {Map<string, import('ajv').ValidateFunction>} */
   const validators = new Map();
+  const required = new Set();
   for (const [p, ops] of Object.entries(openapi.paths)) {
     for (const [method, op] of Object.entries(ops)) {
       const schema = /** @type {any} */ (op).requestBody?.content?.['application/json']?.schema;
       if (schema) validators.set(`${method.toUpperCase()} ${p}`, ajv.compile(schema));
+      if (schema && /** @type {any} */ (op).requestBody.required) required.add(`${method.toUpperCase()} ${p}`);
     }
   }
   /** @type {import('express').RequestHandler} */
   return (req, res, next) => {
     const v = validators.get(`${req.method} ${req.path}`);
     if (!v) return next();
+    if (!required.has(`${req.method} ${req.path}`) && !req.headers['content-length'] && !req.headers['transfer-encoding']) return next();
     if (!req.is('application/json')) return res.status(415).json({ error: 'expected application/json' });
     if (!v(req.body)) {
       const e = v.errors[0];

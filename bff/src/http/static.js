@@ -1,6 +1,7 @@
 // Serves the built PWA: hashed assets cached forever, the shell and the service worker never cached,
 // and index.html for any other non-API path (the SPA router takes it from there).
 import express from 'express';
+import crypto from 'node:crypto';
 import fs from 'node:fs';
 import path from 'node:path';
 
@@ -27,4 +28,24 @@ export function staticApp(appDir) {
     res.sendFile(index);
   };
   return [serve, fallback];
+}
+
+/**
+ * Content-Security-Policy for the app: only our own origin, plus the hashes of the shell's inline scripts
+ * (SvelteKit's bootstrap), read from the built index.html so no 'unsafe-inline' is needed for scripts.
+ * @param {string} appDir
+ */
+export function contentSecurityPolicy(appDir) {
+  let hashes = [];
+  try {
+    const html = fs.readFileSync(path.join(appDir, 'index.html'), 'utf8');
+    hashes = [...html.matchAll(/<script(?![^>]*\bsrc=)[^>]*>([\s\S]*?)<\/script>/g)]
+      .map((m) => `'sha256-${crypto.createHash('sha256').update(m[1]).digest('base64')}'`);
+  } catch { /* not built: nothing inline to allow */ }
+  return [
+    "default-src 'self'", `script-src 'self' ${hashes.join(' ')}`.trim(),
+    // Svelte sets style attributes for layout and transitions.
+    "style-src 'self' 'unsafe-inline'", "img-src 'self' data: blob:", "connect-src 'self'", "worker-src 'self'",
+    "manifest-src 'self'", "font-src 'self'", "object-src 'none'", "base-uri 'self'", "form-action 'self'", "frame-ancestors 'none'",
+  ].join('; ');
 }

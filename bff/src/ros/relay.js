@@ -1,32 +1,31 @@
 // The /ros WebSocket: authenticated by the session cookie, one upstream rosbridge socket per browser socket.
-// Frames pass through `inspect` (the access rules) before they reach rosbridge.
+// Transport only: what may pass is decided by the guard (ros/op-guard.js).
 import { WebSocketServer, WebSocket } from 'ws';
 
 /**
- * @typedef {{username: string, role: string, claims: {jti: string, exp: number}}} Session
- * @typedef {(session: Session, data: Buffer, isBinary: boolean) => {forward: boolean, reply?: string}} Inspector
+ * @typedef {import('./op-guard.js').Session & {claims: import('../auth/tokens.js').Claims}} Session
+ * @typedef {import('./op-guard.js').ClientCtx} ClientCtx
+ * @typedef {{inspect: (ctx: ClientCtx, data: Buffer, isBinary: boolean) => {forward: boolean, data: Buffer, replies: import('./op-guard.js').Frame[]},
+ *   outbound: (ctx: ClientCtx, data: Buffer, isBinary: boolean) => Buffer}} Guard
  */
 
-/** Everything passes; the access-rules issue replaces this. */
-export const allowAll = () => ({ forward: true });
+/** Lets everything through (tests of the transport alone). @type {Guard} */
+export const openGuard = { inspect: (_c, data) => ({ forward: true, data, replies: [] }), outbound: (_c, data) => data };
 
 export class RosRelay {
   /**
    * @param {{upstreamUrl: string, authenticate: (req: import('node:http').IncomingMessage) => Session|null,
-   *   checkOrigin?: (req: import('node:http').IncomingMessage) => boolean, inspect?: Inspector,
-   *   isValid?: (s: Session) => boolean, recheckMs?: number, log?: (msg: string) => void}} o
+   *   checkOrigin?: (req: import('node:http').IncomingMessage) => boolean, guard?: Guard,
+   *   isValid?: (s: Session) => boolean, onClose?: (s: Session, stillOpen: number) => void,
+   *   recheckMs?: number, log?: (msg: string) => void}} o
    */
-  constructor({ upstreamUrl, authenticate, checkOrigin = () => true, inspect = allowAll, isValid = () => true, recheckMs = 2000, log = () => {} }) {
-    this.isValid = isValid;
-    this.upstreamUrl = upstreamUrl;
-    this.authenticate = authenticate;
-    this.checkOrigin = checkOrigin;
-    this.inspect = inspect;
-    this.log = log;
+  constructor({ upstreamUrl, authenticate, checkOrigin = () => true, guard = openGuard, isValid = () => true,
+    onClose = () => {}, recheckMs = 1000, log = () => {} }) {
+    Object.assign(this, { upstreamUrl, authenticate, checkOrigin, guard, isValid, onClose, log });
     this.wss = new WebSocketServer({ noServer: true, maxPayload: 16 * 1024 * 1024 });
-    /** @type {Map<WebSocket, Session>} */
+    /** @type {Map<WebSocket, ClientCtx & {session: Session}>} */
     this.clients = new Map();
-    // Sessions are re-checked so an expired token, a revoked one or a removed user loses its socket.
+    // Sessions are re-checked so an expired or revoked login, or a removed user, loses its socket.
     this.timer = setInterval(() => this.recheck(), recheckMs);
     this.timer.unref();
   }
@@ -41,6 +40,7 @@ export class RosRelay {
     const session = this.authenticate(req);
     if (!session) return refuse(socket, 401, 'Unauthorized');
     const up = new WebSocket(this.upstreamUrl, { perMessageDeflate: false, maxPayload: 64 * 1024 * 1024 });
+    /** @type {[Buffer, boolean][]} */
     const early = [];
     const onEarly = (d, b) => early.push([d, b]);
     up.on('message', onEarly);
@@ -61,16 +61,24 @@ export class RosRelay {
 
   /** @param {WebSocket} ws @param {WebSocket} up @param {Session} session @param {import('node:http').IncomingMessage} req */
   bridge(ws, up, session, req) {
-    this.clients.set(ws, session);
+    /** @type {ClientCtx & {session: Session}} */
+    const ctx = { session, ip: req.socket.remoteAddress || '', rosapiCalls: new Map(), lastPublishAudit: new Map() };
+    this.clients.set(ws, ctx);
     up.removeAllListeners('error');
+    let closed = false;
     const closeBoth = (code, reason) => {
-      this.clients.delete(ws);
+      if (!closed) {
+        closed = true;
+        this.clients.delete(ws);
+        this.onClose(session, [...this.clients.values()].filter((c) => c.session.sid === session.sid).length);
+      }
       if (ws.readyState === WebSocket.OPEN || ws.readyState === WebSocket.CONNECTING) ws.close(code, reason);
       if (up.readyState === WebSocket.OPEN) up.close();
       else if (up.readyState === WebSocket.CONNECTING) up.terminate();
     };
     up.on('message', (data, isBinary) => {
-      if (ws.readyState === WebSocket.OPEN) ws.send(data, { binary: isBinary });
+      if (ws.readyState !== WebSocket.OPEN) return;
+      ws.send(this.guard.outbound(ctx, /** @type {Buffer} */ (data), isBinary), { binary: isBinary });
     });
     up.on('close', () => closeBoth(1012, 'rosbridge closed'));
     up.on('error', (e) => {
@@ -78,31 +86,28 @@ export class RosRelay {
       closeBoth(1011, 'rosbridge error');
     });
     ws.on('message', (raw, isBinary) => {
-      const data = /** @type {Buffer} */ (Array.isArray(raw) ? Buffer.concat(raw) : Buffer.from(/** @type {any} */ (raw)));
-      const verdict = this.inspect(session, data, isBinary);
-      if (verdict.reply && ws.readyState === WebSocket.OPEN) ws.send(verdict.reply);
-      if (verdict.forward && up.readyState === WebSocket.OPEN) up.send(data, { binary: isBinary });
+      const data = Array.isArray(raw) ? Buffer.concat(raw) : Buffer.from(/** @type {any} */ (raw));
+      const v = this.guard.inspect(ctx, data, isBinary);
+      if (ws.readyState === WebSocket.OPEN) for (const r of v.replies) ws.send(r.data, { binary: r.binary });
+      if (v.forward && up.readyState === WebSocket.OPEN) up.send(v.data, { binary: isBinary });
     });
     ws.on('close', () => closeBoth(1000, ''));
     ws.on('error', () => closeBoth(1011, ''));
-    this.log(`/ros opened by ${session.username} (${session.role}) from ${req.socket.remoteAddress}`);
+    this.log(`/ros opened by ${session.username} (${session.role}) from ${ctx.ip}`);
   }
 
   recheck() {
-    for (const [ws, s] of this.clients) {
-      if (s.claims.exp * 1000 <= Date.now()) this.drop(ws, 'session expired');
-      else if (!this.isValid(s)) this.drop(ws, 'session no longer valid');
-    }
+    for (const [ws, c] of this.clients) if (!this.isValid(c.session)) this.drop(ws, 'session ended');
   }
 
-  /** Close every socket of a session (logout) or of a user (removed). @param {(s: Session) => boolean} pred @param {string} reason */
+  /** Close every socket matching (a logout, a removed user). @param {(s: Session) => boolean} pred @param {string} reason */
   closeWhere(pred, reason) {
-    for (const [ws, s] of this.clients) if (pred(s)) this.drop(ws, reason);
+    for (const [ws, c] of this.clients) if (pred(c.session)) this.drop(ws, reason);
   }
 
   /** @param {WebSocket} ws @param {string} reason */
   drop(ws, reason) {
-    this.clients.delete(ws);
+    this.log(`closing /ros of ${this.clients.get(ws)?.session.username}: ${reason}`);
     ws.close(4001, reason);
   }
 

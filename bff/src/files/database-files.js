@@ -1,0 +1,382 @@
+// Replacing the cell's database files (cell file section `database`) from a USB drive or an uploaded file,
+// with a timestamped backup of the old file and restore from backups. No shell commands; every path is
+// built from the configured directory and validated single names, and drive paths are checked by realpath.
+//
+// Drive rule (listDrives): for each USB root (e.g. /media, /run/media), each directory D directly under it
+//   1. is a drive if D is a mount point (its device differs from the root's);
+//   2. otherwise, if directories directly under D are mount points, those are drives (D is a per-user folder,
+//      /media/<user>/<drive> as udisks2 mounts them) and D itself is not;
+//   3. otherwise (nothing mounted: test/demo directories, bind mounts on the same device), D is a per-user
+//      folder when it holds only directories, and then each non-empty one of them is a drive; else D is a
+//      drive when it is not empty.
+// Hidden entries (".name") and symbolic links directly under a root or user folder are ignored.
+import crypto from 'node:crypto';
+import fs from 'node:fs';
+import fsp from 'node:fs/promises';
+import path from 'node:path';
+import { checkContent, ContentError } from './content-check.js';
+
+export const DEFAULT_USB_ROOTS = ['/media', '/run/media'];
+export const DEFAULT_MAX_UPLOAD_BYTES = 10 * 1024 * 1024;
+
+/** An error with an HTTP status and a message meant for the user. */
+export class DatabaseError extends Error {
+  /** @param {number} status @param {string} message */
+  constructor(status, message) {
+    super(message);
+    this.status = status;
+  }
+}
+
+/**
+ * USB roots: USB_ROOTS (colon-separated) wins over the cell file, which wins over the defaults.
+ * @param {string|undefined} envValue process.env.USB_ROOTS @param {{database?: {usb_roots?: string[]}}} [cell]
+ */
+export function resolveUsbRoots(envValue, cell) {
+  const fromEnv = (envValue || '').split(':').filter(Boolean).map((p) => path.resolve(p));
+  if (fromEnv.length) return fromEnv;
+  return cell?.database?.usb_roots?.length ? cell.database.usb_roots : DEFAULT_USB_ROOTS;
+}
+
+/**
+ * A single file or drive name: no '/', '\', NUL, no '..', not '.', not empty, at most 255 bytes.
+ * @param {unknown} s
+ */
+export function isSafeName(s) {
+  return typeof s === 'string' && s.length > 0 && Buffer.byteLength(s) <= 255 && s !== '.' &&
+    !s.includes('..') && !/[/\\\0]/.test(s);
+}
+
+/**
+ * A relative path inside a drive: segments separated by '/', none empty, '.', '..', with NUL or '\'.
+ * @param {unknown} p @param {boolean} allowEmpty
+ */
+export function isSafeRelPath(p, allowEmpty = false) {
+  if (typeof p !== 'string') return false;
+  if (p === '') return allowEmpty;
+  if (p.length > 4096 || p.startsWith('/') || /[\0\\]/.test(p)) return false;
+  return p.replace(/\/+$/, '').split('/').every((seg) => seg !== '' && seg !== '.' && seg !== '..');
+}
+
+/** @param {string} root @param {string} p `p` is `root` or below it (both real paths). */
+const inside = (root, p) => p === root || p.startsWith(root.endsWith(path.sep) ? root : root + path.sep);
+const ext = (name) => path.extname(name).toLowerCase();
+
+/**
+ * @typedef {{username?: string|null, role?: string|null, ip?: string|null}} Actor
+ * @typedef {{name: string, size: number|null, mtime: string|null, exists: boolean}} TargetInfo
+ * @typedef {{id: string, label: string, path: string}} Drive
+ */
+
+export class DatabaseFiles {
+  /**
+   * @param {{cell: {database?: {directory: string, files: string[], usb_roots?: string[], max_upload_bytes?: number}},
+   *   dataDir: string, usbRoots?: string[]|null, audit?: {record: (e: object) => void}|null,
+   *   fsp?: typeof import('node:fs/promises'), keepBackups?: number, now?: () => Date}} o
+   *   fsp: the file operations used for writing (tests inject failures); keepBackups: per file, oldest pruned.
+   */
+  constructor({ cell, dataDir, usbRoots, audit = null, fsp: fileOps = fsp, keepBackups = 20, now = () => new Date() }) {
+    const db = cell.database || { directory: 'database', files: [] };
+    this.cell = cell;
+    this.dataDir = dataDir;
+    this.dir = path.resolve(dataDir, db.directory);
+    this.backupDir = path.join(this.dir, '.backups');
+    this.targets = [...(db.files || [])];
+    this.maxBytes = db.max_upload_bytes || DEFAULT_MAX_UPLOAD_BYTES;
+    this.usbRoots = (usbRoots?.length ? usbRoots : db.usb_roots?.length ? db.usb_roots : DEFAULT_USB_ROOTS).map((r) => path.resolve(r));
+    this.audit = audit;
+    this.fs = fileOps;
+    this.keepBackups = keepBackups;
+    this.now = now;
+    /** @type {Map<string, Promise<unknown>>} one replace/restore at a time per target */
+    this.locks = new Map();
+  }
+
+  /** @returns {Promise<TargetInfo[]>} */
+  async listTargets() {
+    return Promise.all(this.targets.map(async (name) => {
+      try {
+        const st = await fsp.stat(path.join(this.dir, name));
+        return { name, size: st.size, mtime: st.mtime.toISOString(), exists: true };
+      } catch {
+        return { name, size: null, mtime: null, exists: false };
+      }
+    }));
+  }
+
+  /** Drives currently present (see the rule at the top of this file). @returns {Promise<Drive[]>} */
+  async listDrives() {
+    /** @type {Drive[]} */
+    const drives = [];
+    for (const [ri, root] of this.usbRoots.entries()) {
+      const rootSt = await statOrNull(root);
+      if (!rootSt?.isDirectory()) continue;
+      for (const d of await subdirs(root)) {
+        const dPath = path.join(root, d.name);
+        const add = (segments) => drives.push({ id: `${ri}:${segments.join(':')}`, label: segments.at(-1), path: path.join(root, ...segments) });
+        if (d.st.dev !== rootSt.dev) { add([d.name]); continue; }
+        const children = await subdirs(dPath);
+        const mounted = children.filter((c) => c.st.dev !== d.st.dev);
+        if (mounted.length) { for (const c of mounted) add([d.name, c.name]); continue; }
+        const entries = await readdirOrEmpty(dPath);
+        if (entries.length === 0) continue;
+        if (entries.every((e) => e.isDirectory())) {
+          for (const c of children) if ((await readdirOrEmpty(path.join(dPath, c.name))).length) add([d.name, c.name]);
+        } else {
+          add([d.name]);
+        }
+      }
+    }
+    return drives;
+  }
+
+  /**
+   * Directories and files at `subpath` of a drive. Symbolic links are listed only when they resolve inside the drive.
+   * @param {string} driveId @param {string} [subpath]
+   * @returns {Promise<{drive: string, path: string, entries: {name: string, type: 'dir'|'file', size?: number, mtime?: string, targets?: string[]}[]}>}
+   */
+  async listDriveFiles(driveId, subpath = '') {
+    const drive = await this.#drive(driveId);
+    if (!isSafeRelPath(subpath, true)) throw new DatabaseError(400, 'invalid path');
+    const dir = await this.#realInside(drive.real, subpath);
+    const st = await fsp.stat(dir);
+    if (!st.isDirectory()) throw new DatabaseError(400, 'not a directory');
+    const entries = [];
+    for (const e of await readdirOrEmpty(dir)) {
+      if (e.name.startsWith('.')) continue;
+      let full = path.join(dir, e.name);
+      if (e.isSymbolicLink()) {
+        try { full = await fsp.realpath(full); } catch { continue; }
+        if (!inside(drive.real, full)) continue;
+      }
+      const s = await statOrNull(full);
+      if (s?.isDirectory()) entries.push({ name: e.name, type: 'dir' });
+      else if (s?.isFile()) {
+        entries.push({ name: e.name, type: 'file', size: s.size, mtime: s.mtime.toISOString(), targets: this.targets.filter((t) => ext(t) === ext(e.name)) });
+      }
+    }
+    entries.sort((a, b) => (a.type === b.type ? a.name.localeCompare(b.name) : a.type === 'dir' ? -1 : 1));
+    return { drive: driveId, path: subpath.replace(/\/+$/, ''), entries };
+  }
+
+  /**
+   * @param {string} target @param {string} driveId @param {string} relPath @param {Actor} user
+   * @returns {Promise<{file: TargetInfo, backup: string|null}>}
+   */
+  async replaceFromDrive(target, driveId, relPath, user) {
+    return this.#audited('database.replace', target, user, `from drive ${driveId}: ${relPath}`, async () => {
+      this.#target(target);
+      const drive = await this.#drive(driveId);
+      if (!isSafeRelPath(relPath)) throw new DatabaseError(400, 'invalid path');
+      const src = await this.#realInside(drive.real, relPath);
+      const st = await fsp.stat(src);
+      if (!st.isFile()) throw new DatabaseError(400, 'not a file');
+      this.#sameExtension(target, relPath);
+      if (st.size > this.maxBytes) throw tooLarge(this.maxBytes);
+      return this.#install(target, () => fs.createReadStream(src), { check: true });
+    });
+  }
+
+  /**
+   * @param {string} target @param {string|import('node:stream').Readable} source a temporary file or a stream
+   * @param {string} originalName the name the file had on the client (only its extension is used) @param {Actor} user
+   */
+  async replaceFromUpload(target, source, originalName, user) {
+    return this.#audited('database.replace', target, user, `from upload ${JSON.stringify(String(originalName).slice(0, 200))}`, async () => {
+      this.#target(target);
+      this.#sameExtension(target, String(originalName || ''));
+      if (typeof source === 'string' && (await fsp.stat(source)).size > this.maxBytes) throw tooLarge(this.maxBytes);
+      return this.#install(target, () => (typeof source === 'string' ? fs.createReadStream(source) : source), { check: true });
+    });
+  }
+
+  /** Backups of a target, newest first. @param {string} target */
+  async listBackups(target) {
+    this.#target(target);
+    const out = [];
+    for (const e of await readdirOrEmpty(this.backupDir)) {
+      if (!e.isFile() || !e.name.startsWith(`${target}.`) || e.name.endsWith('.tmp')) continue;
+      const st = await statOrNull(path.join(this.backupDir, e.name));
+      if (st) out.push({ name: e.name, size: st.size, mtime: st.mtime.toISOString() });
+    }
+    return out.sort((a, b) => (a.name < b.name ? 1 : a.name > b.name ? -1 : 0));
+  }
+
+  /** Put a backup back; the current file is backed up first, so a restore can be undone. @param {string} target @param {string} backupName @param {Actor} user */
+  async restoreBackup(target, backupName, user) {
+    return this.#audited('database.restore', target, user, `backup ${backupName}`, async () => {
+      this.#target(target);
+      if (!isSafeName(backupName) || !backupName.startsWith(`${target}.`)) throw new DatabaseError(400, 'invalid backup name');
+      const src = path.join(this.backupDir, backupName);
+      const st = await fsp.lstat(src).catch(() => null);
+      if (!st?.isFile()) throw new DatabaseError(404, `no backup ${backupName}`);
+      // No content check: a backup was the live file once, and restoring must work even if checks got stricter.
+      return this.#install(target, () => fs.createReadStream(src), { check: false });
+    });
+  }
+
+  // --- internals ---
+
+  #target(name) {
+    if (!isSafeName(name)) throw new DatabaseError(400, 'invalid file name');
+    if (!this.targets.includes(name)) throw new DatabaseError(404, `${name} is not a database file of this cell`);
+  }
+
+  #sameExtension(target, sourceName) {
+    if (ext(sourceName) !== ext(target)) {
+      throw new DatabaseError(415, `${target} needs a ${ext(target) || 'extension-less'} file, not ${ext(sourceName) || 'one without extension'}`);
+    }
+  }
+
+  /** @returns {Promise<Drive & {real: string}>} */
+  async #drive(id) {
+    if (!isSafeName(id)) throw new DatabaseError(400, 'invalid drive id');
+    const d = (await this.listDrives()).find((x) => x.id === id);
+    if (!d) throw new DatabaseError(404, `no drive ${id}`);
+    try {
+      return { ...d, real: await fsp.realpath(d.path) };
+    } catch {
+      throw new DatabaseError(404, `no drive ${id}`);
+    }
+  }
+
+  /** Real path of rel below root; 404 when missing, 403 when it resolves outside root (symbolic links). */
+  async #realInside(root, rel) {
+    let real;
+    try {
+      real = await fsp.realpath(path.join(root, rel));
+    } catch (e) {
+      if (e.code === 'ENOENT' || e.code === 'ENOTDIR') throw new DatabaseError(404, `no such file on the drive: ${rel}`);
+      throw e;
+    }
+    if (!inside(root, real)) throw new DatabaseError(403, 'the path leads outside the drive');
+    return real;
+  }
+
+  /** Run op; audit ok/denied/failed; I/O errors become a 500 DatabaseError. */
+  async #audited(op, target, user, detail, fn) {
+    const entry = { user: user?.username ?? null, role: user?.role ?? null, ip: user?.ip ?? null, op, target: String(target) };
+    try {
+      const result = await fn();
+      this.audit?.record({ ...entry, outcome: 'ok', detail: result.backup ? `${detail}; old file kept as ${result.backup}` : detail });
+      return result;
+    } catch (e) {
+      const err = e instanceof DatabaseError ? e : new DatabaseError(500, `could not write ${target}: ${e.code || e.message}`);
+      this.audit?.record({ ...entry, outcome: err.status >= 500 ? 'failed' : 'denied', detail: `${detail}: ${err.message}` });
+      throw err;
+    }
+  }
+
+  /**
+   * Copy into a temp file next to the target (size-limited, fsync), check it, back up the old file,
+   * then rename over the target. Any failure removes the temp file and leaves the old file as it was.
+   * @param {string} target @param {() => NodeJS.ReadableStream} open @param {{check: boolean}} o
+   */
+  async #install(target, open, { check }) {
+    const prev = this.locks.get(target) || Promise.resolve();
+    const run = prev.catch(() => {}).then(() => this.#installNow(target, open, check));
+    this.locks.set(target, run);
+    try {
+      return await run;
+    } finally {
+      if (this.locks.get(target) === run) this.locks.delete(target);
+    }
+  }
+
+  async #installNow(target, open, check) {
+    const f = this.fs;
+    const dest = path.join(this.dir, target);
+    await f.mkdir(this.dir, { recursive: true });
+    const old = await statOrNull(dest);
+    const tmp = path.join(this.dir, `.${target}.${process.pid}.${crypto.randomBytes(6).toString('hex')}.tmp`);
+    let backup = null;
+    let done = false;
+    try {
+      const fh = await f.open(tmp, 'wx', old ? old.mode & 0o777 : 0o644);
+      let size = 0;
+      try {
+        for await (const chunk of open()) {
+          size += chunk.length;
+          if (size > this.maxBytes) throw tooLarge(this.maxBytes);
+          await fh.write(chunk);
+        }
+        await fh.sync();
+      } finally {
+        await fh.close();
+      }
+      if (check) {
+        try {
+          checkContent(ext(target), await f.readFile(tmp));
+        } catch (e) {
+          if (e instanceof ContentError) throw new DatabaseError(422, `${target} not replaced: ${e.message}`);
+          throw e;
+        }
+      }
+      if (old) backup = await this.#backup(dest, target);
+      await f.rename(tmp, dest);
+      done = true;
+      await fsyncDir(this.dir);
+    } finally {
+      if (!done) {
+        await f.rm(tmp, { force: true }).catch(() => {});
+        if (backup) await f.rm(path.join(this.backupDir, backup), { force: true }).catch(() => {});
+      }
+    }
+    await this.#prune(target).catch(() => {});
+    const st = await fsp.stat(dest);
+    return { file: { name: target, size: st.size, mtime: st.mtime.toISOString(), exists: true }, backup };
+  }
+
+  /** Copy the current file to .backups/<name>.<ISO time>; returns the backup's name. */
+  async #backup(dest, target) {
+    const f = this.fs;
+    await f.mkdir(this.backupDir, { recursive: true, mode: 0o700 });
+    const stamp = this.now().toISOString();
+    for (let i = 0; ; i++) {
+      const name = `${target}.${stamp}${i ? `-${i}` : ''}`;
+      try {
+        await f.copyFile(dest, path.join(this.backupDir, name), fs.constants.COPYFILE_EXCL);
+      } catch (e) {
+        if (e.code === 'EEXIST' && i < 100) continue;
+        throw e;
+      }
+      const fh = await f.open(path.join(this.backupDir, name), 'r');
+      try { await fh.sync(); } finally { await fh.close(); }
+      await fsyncDir(this.backupDir);
+      return name;
+    }
+  }
+
+  async #prune(target) {
+    const all = await this.listBackups(target);
+    for (const b of all.slice(this.keepBackups)) await this.fs.rm(path.join(this.backupDir, b.name), { force: true });
+  }
+}
+
+const tooLarge = (max) => new DatabaseError(413, `the file is larger than the limit of ${max} bytes`);
+
+async function statOrNull(p) {
+  try { return await fsp.stat(p); } catch { return null; }
+}
+
+async function readdirOrEmpty(dir) {
+  try { return await fsp.readdir(dir, { withFileTypes: true }); } catch { return []; }
+}
+
+/** Real directories (not symbolic links, not hidden) directly in dir, with their stat. */
+async function subdirs(dir) {
+  const out = [];
+  for (const e of await readdirOrEmpty(dir)) {
+    if (!e.isDirectory() || e.name.startsWith('.')) continue;
+    const st = await statOrNull(path.join(dir, e.name));
+    if (st) out.push({ name: e.name, st });
+  }
+  return out;
+}
+
+async function fsyncDir(dir) {
+  try {
+    const fh = await fsp.open(dir, 'r');
+    try { await fh.sync(); } finally { await fh.close(); }
+  } catch { /* best effort on some filesystems */ }
+}
