@@ -30,7 +30,8 @@ export default defineConfig({
   },
   projects: [
     { name: 'phone', use: { ...devices['Pixel 7'], ...chromium } },
-    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium } },
-    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium } },
+    // The access checks drive /ros directly; once, as the operator's phone, is enough.
+    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium }, testIgnore: /access\.spec/ },
+    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium }, testIgnore: /access\.spec/ },
   ],
 });

@@ -105,3 +105,31 @@ test('when rosbridge goes away the browser socket closes', async () => {
   for (const c of upstream.clients) c.terminate();
   assert.equal(await closed, 1012);
 });
+
+test('a denied op is answered with a rosbridge error and never reaches rosbridge', async () => {
+  const { cookie } = await login(t.base, 'operator', t.passwords.operator);
+  const { ws, inbox } = await open(cookie);
+  const before = upstreamFrames.length;
+  ws.send(JSON.stringify({ op: 'publish', id: 'p9', topic: '/cell/mode', msg: { mode: 'running' } }));
+  ws.send(JSON.stringify({ op: 'call_service', id: 'c9', service: '/cell/set_mode', args: {} }));
+  ws.send('{"op": "subscribe", "topic": ');
+  ws.send(cborEncode({ op: 'advertise', id: 'a9', topic: '/x', type: 'std_msgs/String' }), { binary: true });
+  await until(() => inbox.length >= 5);
+  const got = inbox.map((m) => JSON.parse(m));
+  assert.deepEqual(got.map((m) => [m.op, m.id, m.level ?? m.result]), [
+    ['status', 'p9', 'error'], ['status', 'c9', 'error'], ['service_response', 'c9', false], ['status', undefined, 'error'], ['status', 'a9', 'error'],
+  ]);
+  assert.match(got[0].msg, /permission denied: publish \(id p9\): not allowed to publish \/cell\/mode/);
+  assert.match(got[3].msg, /cannot decode the JSON frame/);
+  assert.equal(upstreamFrames.length, before, 'nothing was forwarded');
+  ws.close();
+});
+
+test('removing the user closes the open socket', async () => {
+  await t.bff.users.add('gone', 'operator', 'gone-password');
+  const { cookie } = await login(t.base, 'gone', 'gone-password');
+  const { ws } = await open(cookie);
+  const closed = new Promise((r) => ws.on('close', (code) => r(code)));
+  t.bff.users.remove('gone');
+  assert.equal(await closed, 4001);
+});

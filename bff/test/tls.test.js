@@ -196,6 +196,11 @@ test('httpsRedirect: non-loopback clients go to HTTPS, loopback and bootstrap pa
   for (const a of ['127.0.0.1', '127.1.2.3', '::1', '::ffff:127.0.0.1']) assert.ok(runRedirect(mw, { remoteAddress: a, url: '/x' }).next, a);
   assert.equal(runRedirect(mw, { remoteAddress: '192.0.2.50', host: 'a@b/c' }).status, 400);
   assert.equal(runRedirect(mw, { remoteAddress: '192.0.2.50', url: '//evil.example/x' }).location, 'https://robot-pc:8443/');
+  const tls = runRedirect(mw, { remoteAddress: '192.0.2.50', url: '/x' });
+  assert.equal(tls.status, 308);
+  const viaTls = { next: false };
+  mw({ socket: { remoteAddress: '192.0.2.50', encrypted: true }, headers: { host: 'robot-pc:8443' }, originalUrl: '/x', path: '/x' }, {}, () => { viaTls.next = true; });
+  assert.ok(viaTls.next, 'requests over TLS pass (one app for both servers)');
   assert.ok(!isLoopback('128.0.0.1') && !isLoopback(undefined) && !isLoopback('::ffff:10.0.0.1'));
 
   // Against a real server: loopback requests pass through.

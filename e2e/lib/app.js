@@ -9,6 +9,7 @@ export async function loginAs(page, who) {
   await page.getByTestId('login-username').fill(who);
   await page.getByTestId('login-password').fill(users()[who]);
   await page.getByTestId('login-submit').click();
+  await expect(page).not.toHaveURL(/\/login/);
   await expect(page.getByTestId('page-title')).toBeVisible();
 }
 

@@ -31,8 +31,10 @@ export async function nodePid(node) {
   const uri = lookup.match(/<string>(https?:\/\/[^<]+)<\/string>/)?.[1];
   if (!uri) return null;
   try {
-    const pid = (await xmlrpc(uri, 'getPid', '/e2e')).match(/<(?:int|i4)>(\d+)<\/(?:int|i4)>/)?.[1];
-    return pid ? Number(pid) : null;
+    // getPid answers [code, statusMessage, pid]: the pid is the last integer.
+    const ints = [...(await xmlrpc(uri, 'getPid', '/e2e')).matchAll(/<(?:int|i4)>(\d+)<\/(?:int|i4)>/g)].map((m) => Number(m[1]));
+    const [code, pid] = [ints[0], ints[ints.length - 1]];
+    return code === 1 && ints.length >= 2 && pid > 1 ? pid : null;
   } catch {
     return null;
   }

@@ -206,7 +206,9 @@ export class DatabaseFiles {
   async restoreBackup(target, backupName, user) {
     return this.#audited('database.restore', target, user, `backup ${backupName}`, async () => {
       this.#target(target);
-      if (!isSafeName(backupName) || !backupName.startsWith(`${target}.`)) throw new DatabaseError(400, 'invalid backup name');
+      if (typeof backupName !== 'string' || !backupName.startsWith(`${target}.`) || !isSafeName(backupName.slice(target.length + 1))) {
+        throw new DatabaseError(400, 'invalid backup name');
+      }
       const src = path.join(this.backupDir, backupName);
       const st = await fsp.lstat(src).catch(() => null);
       if (!st?.isFile()) throw new DatabaseError(404, `no backup ${backupName}`);
@@ -218,8 +220,9 @@ export class DatabaseFiles {
   // --- internals ---
 
   #target(name) {
+    if (this.targets.includes(name)) return; // the cell file's names are checked by its schema
     if (!isSafeName(name)) throw new DatabaseError(400, 'invalid file name');
-    if (!this.targets.includes(name)) throw new DatabaseError(404, `${name} is not a database file of this cell`);
+    throw new DatabaseError(404, `${name} is not a database file of this cell`);
   }
 
   #sameExtension(target, sourceName) {

@@ -64,6 +64,8 @@ export function databaseRoutes({ service, requireSession, requirePage, uploadDir
   r.post('/api/database/files/:name/upload', ...guard, async (req, res) => {
     let dir = null;
     let received = false; // past this point the service audits
+    let result;
+    let error = null;
     try {
       // Unknown targets and names are refused before anything is received.
       await service.listBackups(req.params.name);
@@ -76,20 +78,22 @@ export function databaseRoutes({ service, requireSession, requirePage, uploadDir
       await new Promise((resolve, reject) => upload(req, res, (err) => (err ? reject(err) : resolve())));
       if (!req.file) throw new DatabaseError(400, 'no file in field "file"');
       received = true;
-      res.json(await service.replaceFromUpload(req.params.name, req.file.path, req.file.originalname, actor(req)));
+      result = await service.replaceFromUpload(req.params.name, req.file.path, req.file.originalname, actor(req));
     } catch (e) {
-      let err = e;
-      if (e instanceof multer.MulterError) err = e.code === 'LIMIT_FILE_SIZE' ? tooLarge(service.maxBytes) : new DatabaseError(400, `bad upload: ${e.message}`);
-      if (!received && err instanceof DatabaseError) {
+      error = e instanceof multer.MulterError
+        ? (e.code === 'LIMIT_FILE_SIZE' ? tooLarge(service.maxBytes) : new DatabaseError(400, `bad upload: ${e.message}`))
+        : e;
+      if (!received && error instanceof DatabaseError) {
         const a = actor(req);
-        service.audit?.record({ user: a.username, role: a.role, ip: a.ip, op: 'database.replace', target: String(req.params.name), outcome: 'denied', detail: `upload: ${err.message}` });
+        service.audit?.record({ user: a.username, role: a.role, ip: a.ip, op: 'database.replace', target: String(req.params.name), outcome: 'denied', detail: `upload: ${error.message}` });
       }
-      // Refused before reading the body: answer and close instead of reading it all.
-      if (!dir) res.setHeader('Connection', 'close');
-      sendError(res, err, log);
-    } finally {
-      if (dir) await fsp.rm(dir, { recursive: true, force: true }).catch(() => {});
     }
+    // The spooled upload is gone before the answer goes out.
+    if (dir) await fsp.rm(dir, { recursive: true, force: true }).catch((e) => log(`database: could not remove ${dir}: ${e.message}`));
+    if (!error) return res.json(result);
+    // Refused before reading the body: answer and close instead of reading it all.
+    if (!dir) res.setHeader('Connection', 'close');
+    sendError(res, error, log);
   });
   return r;
 }

@@ -17,6 +17,10 @@ export function tlsRoutes({ caCertPem, httpsUrl, fingerprint }) {
   const r = Router();
   const caFingerprint = caCertPem ? new crypto.X509Certificate(caCertPem).fingerprint256 : null;
 
+  r.use((req, res, next) => {
+    res.setHeader('X-Content-Type-Options', 'nosniff');
+    next();
+  });
   r.get('/ca.crt', (req, res) => {
     if (!caCertPem) return res.status(404).type('text/plain').send('No local CA: this server uses a user-provided certificate.\n');
     res.setHeader('Cache-Control', 'no-cache');
@@ -68,13 +72,14 @@ export function isLoopback(addr) {
 
 /**
  * Middleware for the plain-HTTP server: clients other than loopback are sent (308) to
- * https://<same host name>:<tlsPort><path>, except for HTTP_ALLOWED_PATHS.
+ * https://<same host name>:<tlsPort><path>, except for HTTP_ALLOWED_PATHS. Requests that arrived over TLS pass,
+ * so one Express app can serve both the HTTP and the HTTPS server.
  * @param {{tlsPort: number}} o
  * @returns {import('express').RequestHandler}
  */
 export function httpsRedirect({ tlsPort }) {
   return (req, res, next) => {
-    if (HTTP_ALLOWED_PATHS.includes(req.path)) return next();
+    if (req.socket?.encrypted || HTTP_ALLOWED_PATHS.includes(req.path)) return next();
     if (isLoopback(req.socket?.remoteAddress)) return next();
     const host = hostOf(req);
     if (!host) return res.status(400).type('text/plain').send('Bad Host header\n');
