@@ -13,7 +13,8 @@ import { RosHealth } from './ros/health.js';
 import { RosRelay } from './ros/relay.js';
 import { createOpGuard } from './ros/op-guard.js';
 import { authRoutes } from './routes/auth.js';
-import { cellRoutes } from './routes/cell.js';
+import { cellRoutes, requireSession, requirePage } from './routes/cell.js';
+import { DatabaseFiles, databaseRoutes, resolveUsbRoots } from './files/index.js';
 import { controlRoutes } from './routes/control.js';
 import { auditRoutes } from './routes/audit.js';
 import { openapi, validateRequests } from './http/openapi.js';
@@ -47,6 +48,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
       target: h?.username, outcome: 'ok',
     }),
   });
+  const database = new DatabaseFiles({ cell, dataDir: env.dataDir, usbRoots: resolveUsbRoots(env.usbRoots, cell), audit });
   const rosHealth = new RosHealth({ masterUri: env.rosMasterUri, rosbridgePort: env.rosbridgePort });
   const started = Date.now();
   const healthReport = async () => ({ status: 'ok', version: VERSION, uptime_s: (Date.now() - started) / 1000, ros: await rosHealth.get() });
@@ -98,6 +100,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
   app.use(cellRoutes({ cell, cellFile: env.cellConfig, users, healthReport }));
   app.use(controlRoutes({ lease }));
   app.use(auditRoutes({ audit, cell }));
+  app.use(databaseRoutes({ service: database, requireSession, requirePage, log }));
   app.use('/api', (req, res) => res.status(404).json({ error: `no such API: ${req.method} ${req.originalUrl}` }));
   app.use(...staticApp(env.appDir));
   // Malformed JSON and other client errors: a clear message, never a stack trace.
@@ -108,7 +111,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     res.status(status).json({ error: status >= 500 ? 'internal error' : err.type === 'entity.parse.failed' ? 'malformed JSON body' : err.message });
   });
 
-  return { app, relay, cell, users, tokens, audit, lease, initial, close: () => relay.close() };
+  return { app, relay, cell, users, tokens, audit, lease, database, initial, close: () => relay.close() };
 }
 
 /** Origin (when the browser sends one) must name the host the request was sent to. @param {import('node:http').IncomingMessage} req */

@@ -17,6 +17,9 @@ export const REPO_ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url
  * @property {string} urHost UR controller or emulator
  * @property {string} appDir built PWA
  * @property {number} tokenTtlS session token lifetime
+ * @property {string} usbRoots colon-separated USB mount roots (overrides the cell file)
+ * @property {string} tlsCert user-provided certificate (PEM file), replaces the local CA's
+ * @property {string} tlsKey its key
  */
 
 /** @param {NodeJS.ProcessEnv} [e] @returns {Env} */
@@ -34,6 +37,9 @@ export function readEnv(e = process.env) {
     urHost: e.UR_HOST || '127.0.0.1',
     appDir: path.resolve(e.APP_DIR || path.join(REPO_ROOT, 'app/build')),
     tokenTtlS: int(e.SESSION_TTL_S, 30 * 60),
+    usbRoots: e.USB_ROOTS || '',
+    tlsCert: e.TLS_CERT || '',
+    tlsKey: e.TLS_KEY || '',
   };
 }
 

@@ -1,5 +1,6 @@
 // The HTTP API as an OpenAPI 3.1 document, and request validation from it (ajv).
 import Ajv2020 from 'ajv/dist/2020.js';
+import { databaseOpenApiPaths } from '../files/routes.js';
 
 const json = (schema) => ({ content: { 'application/json': { schema } } });
 const error = { type: 'object', required: ['error'], properties: { error: { type: 'string' } } };
@@ -70,6 +71,7 @@ export const openapi = {
         responses: { 200: { description: 'A page of entries', ...json({ type: 'object', required: ['total', 'entries'], properties: { total: { type: 'integer' }, offset: { type: 'integer' }, limit: { type: 'integer' }, entries: { type: 'array' } } }) }, 401: unauthorized, 403: forbidden },
       },
     },
+    ...databaseOpenApiPaths,
     '/api/openapi.json': {
       get: { summary: 'This document', security: [], responses: { 200: { description: 'OpenAPI 3.1 document', ...json({ type: 'object' }) } } },
     },
@@ -79,27 +81,28 @@ export const openapi = {
 /** Express path for an OpenAPI path ("/api/x/{id}" -> "/api/x/:id"). @param {string} p */
 export const expressPath = (p) => p.replace(/\{(\w+)\}/g, ':$1');
 
-/** Middleware validating JSON request bodies against the document. */
+/** Middleware validating JSON request bodies against the document (templated paths included). */
 export function validateRequests() {
   const ajv = new Ajv2020({ allErrors: true, strict: false });
-  /** @type {Map<string, import('ajv').ValidateFunction>} */
-  const validators = new Map();
-  const required = new Set();
+  /** @type {{method: string, re: RegExp, validate: import('ajv').ValidateFunction, required: boolean}[]} */
+  const routes = [];
   for (const [p, ops] of Object.entries(openapi.paths)) {
     for (const [method, op] of Object.entries(ops)) {
-      const schema = /** @type {any} */ (op).requestBody?.content?.['application/json']?.schema;
-      if (schema) validators.set(`${method.toUpperCase()} ${p}`, ajv.compile(schema));
-      if (schema && /** @type {any} */ (op).requestBody.required) required.add(`${method.toUpperCase()} ${p}`);
+      const body = /** @type {any} */ (op).requestBody;
+      const schema = body?.content?.['application/json']?.schema;
+      if (!schema) continue;
+      const re = new RegExp(`^${p.replace(/[.]/g, '\\.').replace(/\{\w+\}/g, '[^/]+')}$`);
+      routes.push({ method: method.toUpperCase(), re, validate: ajv.compile(schema), required: !!body.required });
     }
   }
   /** @type {import('express').RequestHandler} */
   return (req, res, next) => {
-    const v = validators.get(`${req.method} ${req.path}`);
-    if (!v) return next();
-    if (!required.has(`${req.method} ${req.path}`) && !req.headers['content-length'] && !req.headers['transfer-encoding']) return next();
+    const r = routes.find((x) => x.method === req.method && x.re.test(req.path));
+    if (!r) return next();
+    if (!r.required && !req.headers['content-length'] && !req.headers['transfer-encoding']) return next();
     if (!req.is('application/json')) return res.status(415).json({ error: 'expected application/json' });
-    if (!v(req.body)) {
-      const e = v.errors[0];
+    if (!r.validate(req.body)) {
+      const e = r.validate.errors[0];
       return res.status(400).json({ error: `invalid request body${e.instancePath ? ' at ' + e.instancePath : ''}: ${e.message}` });
     }
     next();

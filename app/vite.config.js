@@ -1,0 +1,61 @@
+import { sveltekit } from '@sveltejs/kit/vite';
+import { SvelteKitPWA } from '@vite-pwa/sveltekit';
+import { defineConfig } from 'vite';
+
+const bff = `http://127.0.0.1:${process.env.BFF_PORT || 8080}`;
+const testing = !!process.env.VITEST;
+
+export default defineConfig({
+  plugins: [
+    sveltekit(),
+    // The service worker is irrelevant to unit tests and slows them down.
+    !testing &&
+      SvelteKitPWA({
+        registerType: 'autoUpdate',
+        injectRegister: false,
+        strategies: 'generateSW',
+        // Absolute: the default './sw.js' would resolve against deep URLs like /a/b and fail.
+        base: '/',
+        scope: '/',
+        // Without these two the offline navigation fallback (index.html) is not precached.
+        kit: { spa: true, adapterFallback: 'index.html' },
+        includeAssets: ['favicon.svg', 'icons/*.png'],
+        manifest: {
+          name: 'Robot Cell',
+          short_name: 'Cell',
+          description: 'Run and watch a ROS robot cell from a phone, a tablet or a PC.',
+          theme_color: '#0f172a',
+          background_color: '#0f172a',
+          display: 'standalone',
+          start_url: '/',
+          scope: '/',
+          icons: [
+            { src: '/icons/icon-192.png', sizes: '192x192', type: 'image/png', purpose: 'any' },
+            { src: '/icons/icon-512.png', sizes: '512x512', type: 'image/png', purpose: 'any' },
+            { src: '/icons/maskable-192.png', sizes: '192x192', type: 'image/png', purpose: 'maskable' },
+            { src: '/icons/maskable-512.png', sizes: '512x512', type: 'image/png', purpose: 'maskable' },
+          ],
+        },
+        workbox: {
+          globPatterns: ['**/*.{js,css,html,svg,png,webmanifest}'],
+          navigateFallback: '/index.html',
+          // API, rosbridge socket and the CA download must always hit the server.
+          navigateFallbackDenylist: [/^\/api\//, /^\/ros/, /^\/ca\.crt/],
+          cleanupOutdatedCaches: true,
+        },
+      }),
+  ],
+  server: {
+    proxy: {
+      '/api': { target: bff, changeOrigin: false },
+      '/ros': { target: bff, ws: true, changeOrigin: false },
+    },
+  },
+  resolve: testing ? { conditions: ['browser'] } : undefined,
+  test: {
+    environment: 'jsdom',
+    include: ['src/**/*.test.js', 'tests/**/*.test.js'],
+    setupFiles: ['tests/setup.js'],
+    restoreMocks: true,
+  },
+});
