@@ -42,6 +42,9 @@ export default defineConfig({
           // API, rosbridge socket and the CA download must always hit the server.
           navigateFallbackDenylist: [/^\/api\//, /^\/ros/, /^\/ca\.crt/],
           cleanupOutdatedCaches: true,
+          // Take over the page that installed the worker, so the first visit is already offline-capable.
+          clientsClaim: true,
+          skipWaiting: true,
         },
       }),
   ],
