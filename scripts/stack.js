@@ -28,6 +28,7 @@ const childEnv = {
   USERS_FILE: env.usersFile,
   UR_HOST: env.urHost,
   PORT: String(env.port),
+  TLS_PORT: String(env.tlsPort),
   ROS_HOME: process.env.ROS_HOME || rosHome,
   ROS_LOG_DIR: process.env.ROS_LOG_DIR || path.join(rosHome, 'log'),
   ROS_HOSTNAME: process.env.ROS_HOSTNAME || '127.0.0.1',
@@ -154,7 +155,8 @@ async function main() {
     log('warning: rosbridge does not answer yet; the app will connect when it does');
   }
   const lan = Object.values(os.networkInterfaces()).flat().find((i) => i && i.family === 'IPv4' && !i.internal);
-  log(`ready: http://localhost:${env.port}/${lan ? `  (on the network: http://${lan.address}:${env.port}/)` : ''}`);
+  log(`ready: http://localhost:${env.port}/`);
+  if (lan) log(`phones and tablets: https://${lan.address}:${env.tlsPort}/ (trust the cell's certificate first: http://${lan.address}:${env.port}/trust)`);
 }
 
 /** @param {string} s */

@@ -15,6 +15,7 @@ export function stackEnv({ port, masterPort, rosbridgePort, urHost = '127.0.0.9'
   return {
     ...process.env,
     PORT: String(port),
+    TLS_PORT: String(port + 3),
     ROS_MASTER_URI: `http://127.0.0.1:${masterPort}`,
     ROSBRIDGE_PORT: String(rosbridgePort),
     DATA_DIR: dataDir,

@@ -3,6 +3,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import net from 'node:net';
+import https from 'node:https';
 import { stackEnv, addUser, startStack, stopStack, pidsOfStack } from '../../e2e/lib/stack.js';
 
 const portFree = (port) => new Promise((resolve) => {
@@ -19,6 +20,15 @@ for (const signal of ['SIGINT', 'SIGTERM']) {
       t.after(() => stopStack(stack.proc));
       const health = await (await fetch(`http://127.0.0.1:${base}/api/health`)).json();
       assert.deepEqual(health.ros, { master: true, rosbridge: true }, `round ${round}`);
+      if (round === 1) {
+        // HTTPS for phones: the CA from /ca.crt is all a client needs to trust the cell's HTTPS port.
+        const ca = await (await fetch(`http://127.0.0.1:${base}/ca.crt`)).text();
+        assert.match(ca, /BEGIN CERTIFICATE/);
+        const status = await new Promise((resolve, reject) => {
+          https.get({ host: '127.0.0.1', port: base + 3, path: '/api/health', ca }, (res) => { res.resume(); resolve(res.statusCode); }).on('error', reject);
+        });
+        assert.equal(status, 200);
+      }
       const before = pidsOfStack(env.DATA_DIR);
       assert.ok(before.length >= 5, `roscore, rosmaster, rosout, roslaunch, nodes, BFF: saw ${before.length}`);
 
@@ -29,7 +39,7 @@ for (const signal of ['SIGINT', 'SIGTERM']) {
       const took = (Date.now() - t0) / 1000;
       assert.ok(took < 5, `stopped in ${took} s`);
       assert.deepEqual(pidsOfStack(env.DATA_DIR), [], 'no process of the stack is left');
-      for (const p of [base, base + 1, base + 2]) assert.ok(await portFree(p), `port ${p} is free again`);
+      for (const p of [base, base + 1, base + 2, base + 3]) assert.ok(await portFree(p), `port ${p} is free again`);
     }
   });
 }
