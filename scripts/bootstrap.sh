@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Idempotent install step shared by `npm start` and `npm test`.
 # Each stage is skipped when its inputs have not changed since it last succeeded (stamps in .state/).
+# Usage: bootstrap.sh [stage...]   stages: apt venv npm catkin app (default: all, in that order)
 set -euo pipefail
+STAGES=" ${*:-apt venv npm catkin app} "
+want() { [[ "$STAGES" == *" $1 "* ]]; }
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$ROOT"
 STATE="$ROOT/.state"
@@ -22,6 +25,7 @@ mark() { echo "$2" > "$STATE/$1"; }
 
 # 1. Debian packages
 missing=()
+want apt || APT_PACKAGES=()
 for p in "${APT_PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
@@ -33,12 +37,12 @@ if ((${#missing[@]})); then
 fi
 
 # 2. Python venv that still sees Debian's rospy
-if [[ ! -x .venv/bin/python ]]; then
+if want venv && [[ ! -x .venv/bin/python ]]; then
   log "creating .venv"
   /usr/bin/python3 -m venv --system-site-packages .venv
 fi
 s=$(stamp_of requirements.txt)
-if ! fresh pip "$s"; then
+if want venv && ! fresh pip "$s"; then
   log "pip install -r requirements.txt"
   .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt
   mark pip "$s"
@@ -46,7 +50,7 @@ fi
 
 # 3. npm packages
 s=$(stamp_of package-lock.json)
-if ! fresh npm "$s" || [[ ! -d node_modules ]]; then
+if want npm && { ! fresh npm "$s" || [[ ! -d node_modules ]]; }; then
   log "npm ci"
   PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --no-audit --no-fund --loglevel=error
   mark npm "$s"
@@ -54,7 +58,7 @@ fi
 
 # 4. catkin workspace (msg/srv/action generation, python paths)
 s=$( (find ros_backend/src -type f \( -name '*.msg' -o -name '*.srv' -o -name '*.action' -o -name CMakeLists.txt -o -name package.xml -o -name setup.py \) | sort | xargs cat) | sha256sum | cut -c1-16)
-if ! fresh catkin "$s" || [[ ! -f ros_backend/devel/setup.bash ]]; then
+if want catkin && { ! fresh catkin "$s" || [[ ! -f ros_backend/devel/setup.bash ]]; }; then
   log "catkin_make"
   (cd ros_backend && ROS_LANG_DISABLE=gencpp:genlisp:geneus:gennodejs \
     catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=OFF >"$STATE/catkin.log" 2>&1) \
@@ -64,10 +68,10 @@ fi
 
 # 5. the PWA build
 s=$( (find app/src app/static -type f 2>/dev/null | sort | xargs cat; cat app/package.json app/vite.config.* app/svelte.config.* 2>/dev/null) | sha256sum | cut -c1-16)
-if [[ -f app/package.json ]] && { ! fresh app "$s" || [[ ! -f app/build/index.html ]]; }; then
+if want app && { ! fresh app "$s" || [[ ! -f app/build/index.html ]]; }; then
   log "building app"
   npm run build -w app --silent >"$STATE/app-build.log" 2>&1 || { tail -40 "$STATE/app-build.log" >&2; exit 1; }
   mark app "$s"
 fi
 
-log "ready in $(( $(date +%s) - t0 )) s"
+if want app; then log "ready in $(( $(date +%s) - t0 )) s"; fi
