@@ -91,3 +91,21 @@ test('tokens: valid ones pass; forged, expired, alg:none, wrong-key and revoked 
   const again = new TokenService({ key, ttlS: 60, revoked: new RevocationList(path.join(dir, 'revoked.json')) });
   assert.equal(again.verify(good), null, 'revocation survives a restart');
 });
+
+test('a BFF restart keeps sessions (same key in DATA_DIR); a new key ends them', async () => {
+  const { startBff, login } = await import('./helpers.js');
+  const { createBff } = await import('../src/app.js');
+  const { readEnv } = await import('../src/config/env.js');
+  const a = await startBff();
+  const { cookie } = await login(a.base, 'admin', a.passwords.admin);
+  await a.stop();
+  const again = await createBff(readEnv({ DATA_DIR: a.dataDir, APP_DIR: a.env.appDir }), { log: () => {} });
+  const req = { headers: { cookie } };
+  const { sessionOf } = await import('../src/auth/session.js');
+  assert.equal(sessionOf(/** @type {any} */ (req), again.tokens, again.users)?.username, 'admin');
+  again.close();
+  fs.rmSync(path.join(a.dataDir, 'session.key'));
+  const rekeyed = await createBff(readEnv({ DATA_DIR: a.dataDir, APP_DIR: a.env.appDir }), { log: () => {} });
+  assert.equal(sessionOf(/** @type {any} */ (req), rekeyed.tokens, rekeyed.users), null);
+  rekeyed.close();
+});

@@ -133,3 +133,33 @@ test('removing the user closes the open socket', async () => {
   t.bff.users.remove('gone');
   assert.equal(await closed, 4001);
 });
+
+test('motion ops pass only for the session holding the control lease', async () => {
+  const { cookie } = await login(t.base, 'admin', t.passwords.admin);
+  const { ws, inbox } = await open(cookie);
+  const jog = { op: 'publish', id: 'j1', topic: '/cell/jog', msg: { data: 1 } };
+  ws.send(JSON.stringify(jog));
+  await until(() => inbox.some((m) => JSON.parse(m).id === 'j1'));
+  assert.match(JSON.parse(inbox.find((m) => JSON.parse(m).id === 'j1')).msg, /needs control: take control first/);
+  assert.ok(!upstreamFrames.includes(JSON.stringify(jog)));
+
+  const take = await fetch(`${t.base}/api/control/take`, { method: 'POST', headers: { cookie } });
+  assert.equal(take.status, 200);
+  const jog2 = { ...jog, id: 'j2' };
+  ws.send(JSON.stringify(jog2));
+  await until(() => upstreamFrames.includes(JSON.stringify(jog2)));
+
+  // Another admin session sees the holder named, until it takes over.
+  const other = await login(t.base, 'admin', t.passwords.admin);
+  const o = await open(other.cookie);
+  o.ws.send(JSON.stringify({ ...jog, id: 'j3' }));
+  await until(() => o.inbox.some((m) => JSON.parse(m).id === 'j3'));
+  assert.match(JSON.parse(o.inbox.find((m) => JSON.parse(m).id === 'j3')).msg, /which admin holds/);
+
+  // Closing the holder's only socket gives control back.
+  const closed = new Promise((r) => ws.on('close', r));
+  ws.close();
+  await closed;
+  await until(() => t.bff.lease.describe() === null);
+  o.ws.close();
+});

@@ -99,7 +99,7 @@ export function validateRequests() {
   return (req, res, next) => {
     const r = routes.find((x) => x.method === req.method && x.re.test(req.path));
     if (!r) return next();
-    if (!r.required && !req.headers['content-length'] && !req.headers['transfer-encoding']) return next();
+    if (!r.required && !Number(req.headers['content-length'] || 0) && !req.headers['transfer-encoding']) return next();
     if (!req.is('application/json')) return res.status(415).json({ error: 'expected application/json' });
     if (!r.validate(req.body)) {
       const e = r.validate.errors[0];
