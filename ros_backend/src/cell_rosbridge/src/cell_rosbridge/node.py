@@ -1,0 +1,69 @@
+"""The rosbridge_server node: parameters, ROS init, tornado loop, clean shutdown."""
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import sys
+from typing import Any, Set
+
+import rospy
+import tornado.ioloop
+
+from .protocol import BridgeConfig, BridgeContext
+from .websocket_server import Janitor, RosbridgeHandler, make_app
+
+log = logging.getLogger("rosbridge")
+
+
+def _param(name: str, default: Any) -> Any:
+    value = rospy.get_param(name, default)
+    return type(default)(value) if default is not None else value
+
+
+def main(argv: Any = None) -> None:
+    # Our own signal handling: rospy's handler runs hooks inside the signal frame, where tornado's
+    # add_callback does not wake the loop (it thinks it is on the loop thread), so SIGINT would hang.
+    rospy.init_node("rosbridge_websocket", argv=argv, disable_signals=True)
+    # rospy already configured the root logger (ROS log file); also show our own lines on stderr,
+    # where roslaunch output="screen" and process supervisors pick them up.
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("[rosbridge] %(levelname)s %(message)s"))
+    log.addHandler(handler)
+    log.setLevel(logging.INFO)
+    logging.getLogger("tornado.access").setLevel(logging.WARNING)  # one line per connection is noise
+    port = _param("~port", int(os.environ.get("ROSBRIDGE_PORT", "9090")))
+    address = _param("~address", "127.0.0.1")
+    cfg = BridgeConfig(
+        max_message_size=_param("~max_message_size", BridgeConfig.max_message_size),
+        max_client_buffer=_param("~max_client_buffer", BridgeConfig.max_client_buffer),
+        default_queue_length=_param("~default_queue_length", BridgeConfig.default_queue_length),
+        service_request_timeout=_param("~service_request_timeout", BridgeConfig.service_request_timeout),
+    )
+    context = BridgeContext(config=cfg)
+    clients: Set[RosbridgeHandler] = set()
+    loop = tornado.ioloop.IOLoop.current()
+    janitor = Janitor()
+    app = make_app(context, clients, janitor, hard_limit=max(cfg.max_message_size * 4, 1 << 20))
+    server = app.listen(port, address=address)
+    rospy.loginfo("rosbridge v2 WebSocket server on ws://%s:%d", address, port)
+    print(f"rosbridge listening on {address}:{port}", flush=True)
+
+    def stop() -> None:
+        server.stop()
+        for handler in list(clients):
+            handler.close(1001, "server shutting down")
+        loop.stop()
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: loop.add_callback_from_signal(stop))
+    try:
+        loop.start()
+    finally:
+        janitor.stop()
+        context.hub.shutdown()
+        context.publishers.shutdown()
+        for svc in list(context.services.values()):
+            svc.shutdown("server shutting down")
+        if not rospy.is_shutdown():
+            rospy.signal_shutdown("rosbridge stopped")

@@ -1,0 +1,274 @@
+"""ROS side of the bridge: one rospy subscriber / publisher per topic shared by all clients, service calls.
+
+Why shared: N browser tabs on one topic must cost one TCPROS connection and one conversion per message,
+not N. Encoded forms are cached on the SharedMessage, so each encoding is produced once for all clients.
+"""
+from __future__ import annotations
+
+import itertools
+import logging
+import threading
+from typing import Any, Callable, Dict, Hashable, List, Optional, Set, Tuple
+
+import rosgraph
+import rospy
+import rosservice
+
+from . import conversion, encoding
+from .encoding import Frame
+
+log = logging.getLogger("rosbridge")
+_message_ids = itertools.count(1)
+
+
+class TopicError(ValueError):
+    pass
+
+
+def master_topic_types() -> Dict[str, str]:
+    """topic -> type for every topic the master knows (published or subscribed)."""
+    master = rosgraph.Master(rospy.get_name() or "/rosbridge")
+    return {t: ty for t, ty in master.getTopicTypes() if ty and ty != "*"}
+
+
+def resolve_topic(name: Any) -> str:
+    if not isinstance(name, str) or not name.strip():
+        raise TopicError(f"invalid topic name {name!r}")
+    name = name.strip()
+    resolved = rosgraph.names.resolve_name(name, "/")
+    if not rosgraph.names.is_legal_name(resolved):
+        raise TopicError(f"illegal ROS name '{name}'")
+    return resolved
+
+
+class SharedMessage:
+    """One received ROS message plus its encodings, each computed at most once (thread-safe)."""
+
+    __slots__ = ("topic", "msg", "frag_id", "stamp", "_cache", "_lock")
+
+    def __init__(self, topic: str, msg: Any) -> None:
+        self.topic = topic
+        self.msg = msg
+        self.frag_id = f"publish:{topic}:{next(_message_ids)}"
+        now = rospy.get_rostime()
+        self.stamp = (now.secs, now.nsecs)  # receipt time, for cbor-raw
+        self._cache: Dict[Tuple[str, int], Tuple[List[Frame], int]] = {}
+        self._lock = threading.Lock()
+
+    def frames(self, compression: str, fragment_size: int = 0) -> Tuple[List[Frame], int]:
+        key = (compression, fragment_size if compression in ("none", "png") else 0)
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit
+        with self._lock:
+            hit = self._cache.get(key)
+            if hit is None:
+                hit = self._cache[key] = self._encode(*key)
+            return hit
+
+    def _json_text(self) -> str:
+        hit = self._cache.get(("json-text", 0))
+        if hit is None:
+            text = encoding.encode_json({"op": "publish", "topic": self.topic,
+                                         "msg": conversion.msg_to_dict(self.msg)})
+            hit = self._cache[("json-text", 0)] = ([text], len(text))
+        return hit[0][0]  # type: ignore[return-value]
+
+    def _encode(self, compression: str, fragment_size: int) -> Tuple[List[Frame], int]:
+        if compression == "cbor":
+            data = encoding.encode_cbor({"op": "publish", "topic": self.topic,
+                                         "msg": conversion.msg_to_dict(self.msg, cbor=True)})
+            return [data], len(data)
+        if compression == "cbor-raw":
+            secs, nsecs = self.stamp
+            data = encoding.encode_cbor({"op": "publish", "topic": self.topic,
+                                         "msg": {"secs": secs, "nsecs": nsecs,
+                                                 "bytes": conversion.serialize(self.msg)}})
+            return [data], len(data)
+        frames = encoding.json_frames(self._json_text(), compression, fragment_size, self.frag_id)
+        return frames, sum(len(f) for f in frames)
+
+
+Listener = Callable[[SharedMessage], None]
+
+
+class SharedSubscriber:
+    def __init__(self, topic: str, type_name: str, msg_cls: type) -> None:
+        self.topic, self.type_name, self.msg_cls = topic, type_name, msg_cls
+        self.listeners: Dict[Hashable, Listener] = {}
+        self.last: Optional[SharedMessage] = None
+        self.last_latched = False
+        self._lock = threading.Lock()
+        # Bounded: if conversion ever falls behind a flood, rospy drops the oldest instead of growing.
+        self.sub = rospy.Subscriber(topic, msg_cls, self._callback, queue_size=100, tcp_nodelay=True)
+
+    def _callback(self, msg: Any) -> None:
+        shared = SharedMessage(self.topic, msg)
+        header = getattr(msg, "_connection_header", None) or {}
+        with self._lock:
+            self.last = shared
+            self.last_latched = header.get("latching") == "1"
+            listeners = list(self.listeners.values())
+        for listener in listeners:
+            try:
+                listener(shared)
+            except Exception:  # one broken client must not starve the others
+                log.exception("listener failed on %s", self.topic)
+
+    def add(self, key: Hashable, listener: Listener) -> None:
+        with self._lock:
+            self.listeners[key] = listener
+            replay = self.last if self.last_latched else None
+        # rospy delivers a latched message once per connection; a client joining an existing
+        # subscription would otherwise never see it (e.g. the cell's operation mode).
+        if replay is not None:
+            listener(replay)
+
+
+class TopicHub:
+    """Shared subscribers by topic; released when the last listener leaves."""
+
+    def __init__(self) -> None:
+        self._subs: Dict[str, SharedSubscriber] = {}
+        self._lock = threading.RLock()
+
+    def count(self) -> int:
+        return len(self._subs)
+
+    def subscribe(self, topic: str, type_name: Optional[str], key: Hashable, listener: Listener,
+                  known_types: Callable[[], Dict[str, str]] = master_topic_types) -> str:
+        with self._lock:
+            shared = self._subs.get(topic)
+            if shared is None:
+                actual = known_types().get(topic)
+                if type_name:
+                    wanted = conversion.normalize_type(type_name)
+                    if actual and actual != wanted:
+                        raise TopicError(f"topic {topic} has type {actual}, not {wanted}")
+                elif actual:
+                    wanted = actual
+                else:
+                    raise TopicError(f"cannot infer the type of {topic}: it does not exist; give 'type'")
+                msg_cls = conversion.get_message_class(wanted)
+                shared = self._subs[topic] = SharedSubscriber(topic, wanted, msg_cls)
+            elif type_name and conversion.normalize_type(type_name) != shared.type_name:
+                raise TopicError(f"topic {topic} has type {shared.type_name}, not {type_name}")
+        shared.add(key, listener)
+        return shared.type_name
+
+    def unsubscribe(self, topic: str, key: Hashable) -> None:
+        with self._lock:
+            shared = self._subs.get(topic)
+            if shared is None:
+                return
+            with shared._lock:
+                shared.listeners.pop(key, None)
+                empty = not shared.listeners
+            if empty:
+                del self._subs[topic]
+                shared.sub.unregister()
+
+    def latched(self, topic: str) -> Optional[SharedMessage]:
+        """The last message of a topic if it came from a latching publisher."""
+        shared = self._subs.get(topic)
+        if shared is None:
+            return None
+        with shared._lock:
+            return shared.last if shared.last_latched else None
+
+    def type_of(self, topic: str) -> Optional[str]:
+        shared = self._subs.get(topic)
+        return shared.type_name if shared else None
+
+    def shutdown(self) -> None:
+        with self._lock:
+            for shared in self._subs.values():
+                shared.sub.unregister()
+            self._subs.clear()
+
+
+class SharedPublisher:
+    def __init__(self, topic: str, type_name: str, msg_cls: type, latch: bool, queue_size: int) -> None:
+        self.topic, self.type_name, self.msg_cls, self.latch = topic, type_name, msg_cls, latch
+        self.clients: Set[Hashable] = set()
+        self.pub = rospy.Publisher(topic, msg_cls, latch=latch, queue_size=max(1, queue_size),
+                                   tcp_nodelay=True)
+
+
+class PublisherRegistry:
+    """Shared publishers by topic; each client that advertised (or published) holds a reference."""
+
+    def __init__(self, hub: TopicHub) -> None:
+        self._pubs: Dict[str, SharedPublisher] = {}
+        self._lock = threading.RLock()
+        self._hub = hub
+
+    def count(self) -> int:
+        return len(self._pubs)
+
+    def get(self, topic: str) -> Optional[SharedPublisher]:
+        return self._pubs.get(topic)
+
+    def register(self, client: Hashable, topic: str, type_name: Optional[str], latch: bool = False,
+                 queue_size: int = 100) -> SharedPublisher:
+        with self._lock:
+            pub = self._pubs.get(topic)
+            if pub is None:
+                actual = master_topic_types().get(topic) or self._hub.type_of(topic)
+                if type_name:
+                    wanted = conversion.normalize_type(type_name)
+                    msg_cls = conversion.get_message_class(wanted)
+                    if actual and actual != wanted:
+                        raise TopicError(f"topic {topic} already has type {actual}, not {wanted}")
+                elif actual:
+                    wanted, msg_cls = actual, conversion.get_message_class(actual)
+                else:
+                    raise TopicError(f"topic {topic} does not exist and no type was given")
+                pub = self._pubs[topic] = SharedPublisher(topic, wanted, msg_cls, latch, queue_size)
+            elif type_name and conversion.normalize_type(type_name) != pub.type_name:
+                raise TopicError(f"topic {topic} already has type {pub.type_name}, not {type_name}")
+            pub.clients.add(client)
+            return pub
+
+    def unregister(self, client: Hashable, topic: str) -> bool:
+        with self._lock:
+            pub = self._pubs.get(topic)
+            if pub is None or client not in pub.clients:
+                return False
+            pub.clients.discard(client)
+            if not pub.clients:
+                del self._pubs[topic]
+                pub.pub.unregister()
+            return True
+
+    def shutdown(self) -> None:
+        with self._lock:
+            for pub in self._pubs.values():
+                pub.pub.unregister()
+            self._pubs.clear()
+
+
+class ServiceCallError(RuntimeError):
+    pass
+
+
+def call_service(name: str, args: Any) -> Tuple[str, Any]:
+    """Blocking call of a ROS service by name; returns (service type, response message).
+
+    A missing or dead service raises ServiceCallError quickly (master lookup + connect refused on loopback).
+    """
+    try:
+        type_name = rosservice.get_service_type(name)
+    except Exception as exc:
+        raise ServiceCallError(f"service {name} is not reachable: {exc}") from exc
+    if not type_name:
+        raise ServiceCallError(f"service {name} does not exist")
+    srv_cls = conversion.get_service_class(type_name)
+    request = conversion.args_to_request(srv_cls._request_class, args)
+    proxy = rospy.ServiceProxy(name, srv_cls)
+    try:
+        return type_name, proxy.call(request)
+    except rospy.ServiceException as exc:
+        raise ServiceCallError(f"service {name} failed: {exc}") from exc
+    finally:
+        proxy.close()

@@ -1,0 +1,1 @@
+"""rosapi: ROS graph and parameter introspection served as /rosapi/* services (rosbridge companion)."""
