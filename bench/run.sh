@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# npm run bench: every benchmark, one after the other (each starts and stops its own processes, loopback only).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/bootstrap.sh
+source scripts/ros-env.sh
+echo "== rosbridge server (direct) =="
+python bench/rosbridge_bench.py
+echo; echo "== BFF relay path =="
+node bench/bff_relay_bench.mjs
+if [[ -f bench/sim_bench.py ]]; then echo; echo "== simulated cell =="; python bench/sim_bench.py; fi
