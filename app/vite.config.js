@@ -39,8 +39,8 @@ export default defineConfig({
         workbox: {
           globPatterns: ['**/*.{js,css,html,svg,png,webmanifest}'],
           navigateFallback: '/index.html',
-          // API, rosbridge socket and the CA download must always hit the server.
-          navigateFallbackDenylist: [/^\/api\//, /^\/ros/, /^\/ca\.crt/],
+          // API, rosbridge socket, the CA download and its trust page must always hit the server.
+          navigateFallbackDenylist: [/^\/api\//, /^\/ros/, /^\/ca\.crt/, /^\/trust/],
           cleanupOutdatedCaches: true,
           // Take over the page that installed the worker, so the first visit is already offline-capable.
           clientsClaim: true,

@@ -114,3 +114,12 @@ test('logout ends the session: the old cookie no longer opens /ros or the API', 
   expect(me.status).toBe(401);
   expect(users().operator).toBeTruthy();
 });
+
+test('the certificate trust page comes from the server even once the service worker is active', async ({ page }) => {
+  await loginAs(page, 'operator');
+  await expect.poll(() => page.evaluate(() => !!navigator.serviceWorker.controller)).toBe(true);
+  await page.goto('/trust');
+  await expect(page.locator('a[href="/ca.crt"]').first()).toBeVisible();
+  await expect(page.locator('svg').first()).toBeVisible();
+  await expect(page.getByTestId('not-found')).toHaveCount(0);
+});
