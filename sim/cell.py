@@ -1,0 +1,104 @@
+"""Wires one simulated cell together: world, controller loop, UR servers, and optionally cameras and ROS."""
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from dataclasses import dataclass
+
+from .controller import Controller
+from .dashboard import DashboardServer
+from .rtde_server import RTDEServer
+from .script_server import ScriptServer
+from .tcp import TcpServer
+from .world import World
+
+log = logging.getLogger("sim.cell")
+
+SCRIPT_PORTS = (30001, 30002, 30003)
+
+
+@dataclass
+class CellOptions:
+    host: str = "127.0.0.1"
+    seed: int = 0
+    speed: float = 1.0
+    camera_size: tuple[int, int] = (640, 480)
+    camera_rate: float = 15.0
+    sensor_rate: float = 50.0
+    cameras: bool = True
+    ros: bool = True
+    powered: bool = True
+
+
+class Cell:
+    def __init__(self, opts: CellOptions) -> None:
+        self.opts = opts
+        self.world = World(seed=opts.seed)
+        self.controller = Controller(self.world, boot_powered=opts.powered)
+        self.servers: list[TcpServer] = [RTDEServer(opts.host, self.controller),
+                                         DashboardServer(opts.host, self.controller)]
+        self.servers += [ScriptServer(opts.host, port, self.controller) for port in SCRIPT_PORTS]
+        self.cameras = None
+        self.ros = None
+
+    def start(self) -> None:
+        for s in self.servers:
+            s.start()
+        if self.opts.cameras:
+            from .cameras import CameraRig
+            self.cameras = CameraRig(self.world, self.opts.camera_size, self.opts.camera_rate, self.opts.speed)
+        if self.opts.ros:
+            from .ros_bridge import RosBridge, ros_master_online
+            if ros_master_online():
+                try:
+                    self.ros = RosBridge(self.controller, self.opts.sensor_rate, self.opts.speed)
+                except ImportError as e:  # e.g. cell_msgs not built yet: still serve the UR ports
+                    log.error("ROS messages not importable (%s): build ros_backend; running without ROS", e)
+                else:
+                    self.ros.start()
+            else:
+                log.warning("ROS master not reachable: running without ROS")
+        if self.cameras is not None:
+            self.cameras.start(self.controller, self.ros.publish_image if self.ros else None)
+        self._t0 = (time.monotonic(), self.controller.sim_time)
+        self.controller.start(self.opts.speed)
+
+    def stats(self) -> str:
+        """One line of performance figures (the bench parses it): real-time factor, camera frames, render ms."""
+        wall = time.monotonic() - self._t0[0]
+        rtf = (self.controller.sim_time - self._t0[1]) / wall if wall > 0 else 0.0
+        line = f"stats: wall={wall:.2f}s sim={self.controller.sim_time:.2f}s rtf={rtf:.3f}"
+        if self.cameras is not None and self.cameras.render_ms:
+            ms = sorted(self.cameras.render_ms)
+            line += (f" camera_cycles={self.cameras.frames} camera_hz={self.cameras.frames / wall:.2f}"
+                     f" render_ms_mean={sum(ms) / len(ms):.1f} render_ms_p95={ms[int(len(ms) * 0.95)]:.1f}"
+                     f" renderer={self.cameras.renderer}")
+        return line
+
+    def stop(self) -> None:
+        if hasattr(self, "_t0"):
+            log.info(self.stats())
+        t0 = time.monotonic()
+        for s in self.servers:
+            s.signal_stop()
+        if self.cameras is not None:
+            self.cameras.signal_stop()
+        for s in self.servers:
+            s.stop()
+        t1 = time.monotonic()
+        self.controller.stop()
+        t2 = time.monotonic()
+        # Unregistering from the ROS master takes several XML-RPC round trips: overlap it with the cameras.
+        ros_stop = threading.Thread(target=self.ros.stop, daemon=True) if self.ros is not None else None
+        if ros_stop is not None:
+            ros_stop.start()
+        if self.cameras is not None:
+            self.cameras.stop()
+        t3 = time.monotonic()
+        if ros_stop is not None:
+            ros_stop.join(1.0)
+        t4 = time.monotonic()
+        self.world.close()
+        log.debug("stop took: servers %.2fs, controller %.2fs, cameras %.2fs, ros %.2fs",
+                  t1 - t0, t2 - t1, t3 - t2, t4 - t3)

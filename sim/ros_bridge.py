@@ -1,0 +1,141 @@
+"""ROS 1 side of the cell: sensor topics, camera images, the alarm list and the fault service.
+
+Topics: /joint_states, /cell/wrench, /cell/tactile (sensor rate), /cell/camera/<name>/image/compressed,
+/cell/alarms (latched AlarmList). Service: /sim/trigger_fault (cell_msgs/TriggerFault).
+"""
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from typing import Optional
+
+from .controller import Controller
+from .safety import Alarm
+from .urdf import ARM_JOINTS, FINGER_JOINTS
+
+log = logging.getLogger("sim.ros")
+
+
+def ros_master_online() -> bool:
+    """Check first: rospy.init_node blocks forever without a master."""
+    import rosgraph
+    try:
+        return bool(rosgraph.is_master_online())
+    except Exception:
+        return False
+
+
+class RosBridge:
+    def __init__(self, controller: Controller, sensor_rate: float, speed: float = 1.0,
+                 node_name: str = "sim_cell") -> None:
+        import rospy
+        from cell_msgs.msg import AlarmList, Scatter
+        from cell_msgs.srv import TriggerFault
+        from geometry_msgs.msg import WrenchStamped
+        from sensor_msgs.msg import CompressedImage, JointState
+
+        self.rospy = rospy
+        self.ctl = controller
+        self.period = 1.0 / sensor_rate
+        # disable_signals: the CLI owns SIGINT/SIGTERM and shuts us down itself.
+        root_handlers, root_level = list(logging.root.handlers), logging.root.level
+        rospy.init_node(node_name, anonymous=False, disable_signals=True)
+        # rospy's logging setup disables every existing logger: give ours (and the console) back.
+        for name, lg in logging.root.manager.loggerDict.items():
+            if name.startswith("sim") and isinstance(lg, logging.Logger):
+                lg.disabled = False
+        for h in root_handlers:
+            if h not in logging.root.handlers:
+                logging.root.addHandler(h)
+        logging.root.setLevel(root_level)
+        self.pub_joints = rospy.Publisher("/joint_states", JointState, queue_size=10)
+        self.pub_wrench = rospy.Publisher("/cell/wrench", WrenchStamped, queue_size=10)
+        self.pub_tactile = rospy.Publisher("/cell/tactile", Scatter, queue_size=10)
+        self.pub_alarms = rospy.Publisher("/cell/alarms", AlarmList, queue_size=5, latch=True)
+        self.pub_images = {name: rospy.Publisher(f"/cell/camera/{name}/image/compressed", CompressedImage,
+                                                 queue_size=2) for name in ("workbench", "global")}
+        self._types = dict(AlarmList=AlarmList, Scatter=Scatter, WrenchStamped=WrenchStamped,
+                           JointState=JointState, CompressedImage=CompressedImage)
+        self.service = rospy.Service("/sim/trigger_fault", TriggerFault, self._trigger_fault)
+        self._stop = threading.Event()
+        self._thread: Optional[threading.Thread] = None
+        self.published = 0
+
+    def start(self) -> None:
+        self.ctl.alarms.subscribe(self._publish_alarms)
+        self._thread = threading.Thread(target=self._sensor_loop, name="ros-sensors", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(1.0)
+        self.service.shutdown("sim stopping")
+        self.rospy.signal_shutdown("sim stopping")
+
+    # ---- publishers ---------------------------------------------------------------------------
+    def _sensor_loop(self) -> None:
+        next_t = time.perf_counter()
+        while not self._stop.is_set():
+            try:
+                self._publish_sensors()
+            except Exception:
+                log.exception("sensor publish failed")
+            next_t += self.period
+            delay = next_t - time.perf_counter()
+            if delay > 0:
+                self._stop.wait(delay)
+            elif delay < -self.period:  # more than a period late: skip ahead instead of bursting
+                next_t = time.perf_counter()
+
+    def _publish_sensors(self) -> None:
+        snap = self.ctl.snapshot
+        with self.ctl.lock:  # contact queries touch the physics client
+            xs, forces = self.ctl.world.tactile()
+        stamp = self.rospy.Time.now()
+        js = self._types["JointState"]()
+        js.header.stamp = stamp
+        js.name = ARM_JOINTS + FINGER_JOINTS
+        js.position = list(snap.actual_q) + list(snap.finger_q)
+        js.velocity = list(snap.actual_qd) + [0.0, 0.0]
+        js.effort = list(snap.actual_current * 10.0) + [0.0, 0.0]
+        self.pub_joints.publish(js)
+        w = self._types["WrenchStamped"]()
+        w.header.stamp = stamp
+        w.header.frame_id = "ft_sensor"
+        f = snap.ft_raw
+        w.wrench.force.x, w.wrench.force.y, w.wrench.force.z = float(f[0]), float(f[1]), float(f[2])
+        w.wrench.torque.x, w.wrench.torque.y, w.wrench.torque.z = float(f[3]), float(f[4]), float(f[5])
+        self.pub_wrench.publish(w)
+        t = self._types["Scatter"]()
+        t.header.stamp = stamp
+        t.header.frame_id = "finger_left_pad"
+        t.x, t.y = xs, forces
+        self.pub_tactile.publish(t)
+        self.published += 1
+
+    def publish_image(self, name: str, jpeg: bytes) -> None:
+        msg = self._types["CompressedImage"]()
+        msg.header.stamp = self.rospy.Time.now()
+        msg.header.frame_id = f"camera_{name}"
+        msg.format = "jpeg"
+        msg.data = jpeg
+        self.pub_images[name].publish(msg)
+
+    def _publish_alarms(self, alarms: list[Alarm]) -> None:
+        from cell_msgs.msg import Alarm as AlarmMsg
+        out = self._types["AlarmList"]()
+        out.header.stamp = self.rospy.Time.now()
+        for a in alarms:
+            m = AlarmMsg()
+            m.id, m.text, m.severity, m.active = a.id, a.text, a.severity, a.active
+            m.since = self.rospy.Time.from_sec(a.since)
+            out.alarms.append(m)
+        self.pub_alarms.publish(out)
+
+    def _trigger_fault(self, req):
+        from cell_msgs.srv import TriggerFaultResponse
+        ok, message = self.ctl.trigger_fault(req.fault.strip())
+        log.info("trigger_fault(%s): %s", req.fault, message)
+        return TriggerFaultResponse(success=ok, message=message)
