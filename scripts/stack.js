@@ -137,7 +137,9 @@ async function main() {
   const simulated = cell.robot?.simulated !== false && process.env.UR_SIM !== '0';
   if (simulated && fs.existsSync(path.join(REPO_ROOT, 'sim/__main__.py'))) {
     log(`starting the simulated UR5 cell at ${env.urHost}`);
-    startRos('sim', `python -m sim --host ${shellQuote(env.urHost)}`, false);
+    // SIM_ARGS: extra `python -m sim` options, e.g. "--no-cameras" or "--camera-size 320x240".
+    const extra = (process.env.SIM_ARGS || '').split(/\s+/).filter(Boolean).map(shellQuote).join(' ');
+    startRos('sim', `python -m sim --host ${shellQuote(env.urHost)} ${extra}`, false);
   } else {
     log(`robot: UR controller at ${env.urHost}`);
   }

@@ -4,7 +4,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import net from 'node:net';
 import https from 'node:https';
-import { stackEnv, addUser, startStack, stopStack, pidsOfStack } from '../../e2e/lib/stack.js';
+import { stackEnv, addUser, startStack, stopStack, pidsOfStack, REPO_ROOT } from '../../e2e/lib/stack.js';
 
 const portFree = (port) => new Promise((resolve) => {
   const s = net.createServer().once('error', () => resolve(false)).listen(port, '127.0.0.1', () => s.close(() => resolve(true)));
@@ -47,5 +47,31 @@ for (const signal of ['SIGINT', 'SIGTERM']) {
 test('a bad cell file stops the start with the field named and exit code 2', { timeout: 60_000 }, async () => {
   const env = stackEnv({ port: 28280, masterPort: 28281, rosbridgePort: 28282, extraEnv: { CELL_CONFIG: '/nonexistent/cell.yaml' } });
   await assert.rejects(startStack(env, 20_000), /cannot read: ENOENT[\s\S]*exited \(2\)|exited \(2\)[\s\S]*cannot read/);
+  assert.deepEqual(pidsOfStack(env.DATA_DIR), []);
+});
+
+test('npm start runs the simulated cell by default, at UR_HOST, and stops it with the rest', { timeout: 180_000 }, async (t) => {
+  const base = 28380;
+  const urHost = '127.0.0.21';
+  const env = stackEnv({ port: base, masterPort: base + 1, rosbridgePort: base + 2, urHost, extraEnv: { SIM_ARGS: '--no-cameras' } });
+  delete env.UR_SIM;
+  const stack = await startStack(env);
+  t.after(() => stopStack(stack.proc));
+  // The UR dashboard server answers at UR_HOST like a real controller...
+  const greeting = await new Promise((resolve, reject) => {
+    const s = net.connect({ host: urHost, port: 29999 });
+    s.setTimeout(20_000, () => reject(new Error('no dashboard greeting')));
+    s.once('data', (d) => { s.destroy(); resolve(d.toString()); });
+    s.once('error', reject);
+  });
+  assert.match(greeting, /Universal Robots Dashboard Server/);
+  // ...and the simulated cell publishes joint states on the stack's ROS master.
+  const { execFile } = await import('node:child_process');
+  const out = await new Promise((resolve, reject) => execFile('bash', ['-c', 'source scripts/ros-env.sh && rostopic echo -n 1 /joint_states/name'],
+    { cwd: REPO_ROOT, env, timeout: 60_000 }, (e, stdout) => (e ? reject(e) : resolve(stdout))));
+  assert.match(out, /shoulder_pan_joint/);
+  const t0 = Date.now();
+  await stopStack(stack.proc);
+  assert.ok((Date.now() - t0) / 1000 < 5);
   assert.deepEqual(pidsOfStack(env.DATA_DIR), []);
 });
