@@ -15,7 +15,9 @@ from rb_helpers import ROSAPI, BridgeProcess, wait_for
 def ros_node(roscore: str) -> str:
     """This test process as a ROS node (helper publishers, subscribers, service callers)."""
     import rospy
-    rospy.init_node("rosbridge_tests", anonymous=True, disable_signals=True)
+    # One ROS node per process: another suite in the same pytest session may have made it already.
+    if not rospy.core.is_initialized():
+        rospy.init_node("rosbridge_tests", anonymous=True, disable_signals=True)
     return rospy.get_name()
 
 
