@@ -46,7 +46,9 @@ function startRos(name, command, essential = true) {
 function start(name, cmd, args, essential = true) {
   const proc = spawn(cmd, args, { cwd: REPO_ROOT, env: childEnv, detached: true, stdio: ['ignore', 'pipe', 'pipe'] });
   const prefix = (stream, out) => stream.on('data', (d) => {
-    for (const line of d.toString().split('\n')) if (line.trim()) out.write(`[${name}] ${line}\n`);
+    for (const line of d.toString().split('\n')) {
+      if (line.trim()) out.write(line.startsWith(`[${name}]`) ? `${line}\n` : `[${name}] ${line}\n`);
+    }
   });
   prefix(proc.stdout, process.stdout);
   prefix(proc.stderr, process.stderr);
