@@ -35,7 +35,7 @@ CAMERAS = (
 
 
 def _render_main(conn, seed: int, urdf_path: str, size: tuple[int, int]) -> None:
-    """Render process: build the replica, then answer snapshot -> [(name, jpeg, ms)] until told to stop."""
+    """Render process: build the replica, then answer (snapshot, camera names) -> [(name, jpeg, ms)] until told to stop."""
     import os
     import signal
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group: the parent stops us
@@ -64,9 +64,12 @@ def _render_main(conn, seed: int, urdf_path: str, size: tuple[int, int]) -> None
         msg = conn.recv()
         if msg is None:
             break
-        world.apply_snapshot(msg)
+        snapshot, wanted = msg
+        world.apply_snapshot(snapshot)
         frames = []
         for name, view, projection in views:
+            if name not in wanted:
+                continue
             t0 = time.perf_counter()
             _, _, rgba, _, _ = p.getCameraImage(w, h, view, projection, renderer=renderer,
                                                 flags=pybullet.ER_NO_SEGMENTATION_MASK)
@@ -98,18 +101,20 @@ class CameraRig:
         self.render_ms: list[float] = []
         self.last: dict[str, bytes] = {}
 
-    def start(self, controller, publish: Optional[Callable[[str, bytes], None]]) -> None:
-        self._thread = threading.Thread(target=self._loop, args=(controller, publish), name="cameras", daemon=True)
+    def start(self, controller, publish: Optional[Callable[[str, bytes], None]],
+              watched: Optional[Callable[[], set[str]]] = None) -> None:
+        """`watched` names the cameras someone subscribes to; only those are rendered (None: all of them)."""
+        self._thread = threading.Thread(target=self._loop, args=(controller, publish, watched), name="cameras", daemon=True)
         self._thread.start()
 
-    def _loop(self, controller, publish) -> None:
+    def _loop(self, controller, publish, watched) -> None:
         try:
-            self._render_frames(controller, publish)
+            self._render_frames(controller, publish, watched)
         except (EOFError, OSError, ValueError) as e:  # the render process went away (normally: stopping)
             if not self._stop.is_set():
                 log.error("camera process lost: %s", e)
 
-    def _render_frames(self, controller, publish) -> None:
+    def _render_frames(self, controller, publish, watched) -> None:
         deadline = time.monotonic() + 60
         while not self.conn.poll(0.05):
             if self._stop.is_set():
@@ -121,10 +126,17 @@ class CameraRig:
         self.ready = True
         log.info("cameras: %dx%d at %.3g Hz, renderer %s", self.size[0], self.size[1], 1 / self.period, self.renderer)
         next_t = time.perf_counter()
+        all_names = {c.name for c in CAMERAS}
         while not self._stop.is_set():
+            # Rendering is the costliest thing the cell does: skip the views nobody watches.
+            wanted = all_names if watched is None else set(watched()) & all_names
+            if not wanted:
+                next_t = time.perf_counter() + self.period
+                self._stop.wait(self.period)
+                continue
             with controller.lock:  # the physics client is not thread-safe
                 snap = self.world.snapshot()
-            self.conn.send(snap)
+            self.conn.send((snap, wanted))
             while not self.conn.poll(0.05):
                 if self._stop.is_set() or not self.proc.is_alive():
                     return

@@ -60,7 +60,8 @@ class Cell:
             else:
                 log.warning("ROS master not reachable: running without ROS")
         if self.cameras is not None:
-            self.cameras.start(self.controller, self.ros.publish_image if self.ros else None)
+            self.cameras.start(self.controller, self.ros.publish_image if self.ros else None,
+                               self.ros.watched_cameras if self.ros else None)
         self._t0 = (time.monotonic(), self.controller.sim_time)
         self.controller.start(self.opts.speed)
 

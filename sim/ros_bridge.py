@@ -115,6 +115,10 @@ class RosBridge:
         self.pub_tactile.publish(t)
         self.published += 1
 
+    def watched_cameras(self) -> set[str]:
+        """Cameras whose image topic has a subscriber right now."""
+        return {name for name, pub in self.pub_images.items() if pub.get_num_connections() > 0}
+
     def publish_image(self, name: str, jpeg: bytes) -> None:
         msg = self._types["CompressedImage"]()
         msg.header.stamp = self.rospy.Time.now()

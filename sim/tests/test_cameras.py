@@ -1,0 +1,49 @@
+"""Cameras render only the views somebody watches (a phone shows one stream at a time)."""
+from __future__ import annotations
+
+import threading
+
+from conftest import wait_for
+from sim.cameras import CameraRig
+from sim.world import World
+
+
+class _Controller:
+    lock = threading.Lock()
+
+
+def test_only_watched_cameras_are_rendered() -> None:
+    world = World(seed=0)
+    rig = CameraRig(world, (96, 72), rate=20.0)
+    watched: set[str] = {"workbench"}
+    got: list[str] = []
+    rig.start(_Controller(), lambda name, jpeg: got.append(name), lambda: watched)
+    try:
+        wait_for(lambda: got.count("workbench") >= 5, 60, what="workbench frames")
+        assert set(got) == {"workbench"}
+
+        watched = set()
+        # A frame already in flight may still arrive; after that, nothing for many periods.
+        before = len(got)
+        wait_for_quiet(lambda: len(got) > before, 0.3)
+        n = len(got)
+        cycles = rig.frames
+        assert n - before <= 1
+        assert not wait_for_quiet(lambda: len(got) > n, 0.5)
+        assert rig.frames == cycles
+
+        watched = {"global"}
+        wait_for(lambda: got[n:].count("global") >= 3, 30, what="global frames")
+        assert set(got[n:]) == {"global"}
+    finally:
+        rig.stop()
+        world.close()
+
+
+def wait_for_quiet(predicate, seconds: float) -> bool:
+    """True as soon as `predicate` holds within `seconds`; False if it never does (what this test wants)."""
+    try:
+        wait_for(predicate, seconds, what="a frame")
+        return True
+    except AssertionError:
+        return False
