@@ -14,6 +14,8 @@ import time
 from dataclasses import dataclass
 from typing import Callable, Optional
 
+from .pacing import Pacer
+
 log = logging.getLogger("sim.cameras")
 
 JPEG_QUALITY = 80
@@ -125,14 +127,13 @@ class CameraRig:
         _, self.renderer = self.conn.recv()
         self.ready = True
         log.info("cameras: %dx%d at %.3g Hz, renderer %s", self.size[0], self.size[1], 1 / self.period, self.renderer)
-        next_t = time.perf_counter()
+        pacer = Pacer(self.period, self._stop)
         all_names = {c.name for c in CAMERAS}
         while not self._stop.is_set():
             # Rendering is the costliest thing the cell does: skip the views nobody watches.
             wanted = all_names if watched is None else set(watched()) & all_names
             if not wanted:
-                next_t = time.perf_counter() + self.period
-                self._stop.wait(self.period)
+                pacer.wait()
                 continue
             with controller.lock:  # the physics client is not thread-safe
                 snap = self.world.snapshot()
@@ -150,12 +151,7 @@ class CameraRig:
                     except Exception:
                         log.exception("image publish failed")
             self.frames += 1
-            next_t += self.period
-            delay = next_t - time.perf_counter()
-            if delay > 0:
-                self._stop.wait(delay)
-            elif delay < -self.period:  # more than a frame late: drop it rather than burst
-                next_t = time.perf_counter()
+            pacer.wait()
 
     def signal_stop(self) -> None:
         self._stop.set()

@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import logging
 import threading
-import time
 from typing import Optional
 
 from .controller import Controller
+from .pacing import Pacer
 from .safety import Alarm
 from .urdf import ARM_JOINTS, FINGER_JOINTS
 
@@ -76,18 +76,13 @@ class RosBridge:
 
     # ---- publishers ---------------------------------------------------------------------------
     def _sensor_loop(self) -> None:
-        next_t = time.perf_counter()
+        pacer = Pacer(self.period, self._stop)
         while not self._stop.is_set():
             try:
                 self._publish_sensors()
             except Exception:
                 log.exception("sensor publish failed")
-            next_t += self.period
-            delay = next_t - time.perf_counter()
-            if delay > 0:
-                self._stop.wait(delay)
-            elif delay < -self.period:  # more than a period late: skip ahead instead of bursting
-                next_t = time.perf_counter()
+            pacer.wait()
 
     def _publish_sensors(self) -> None:
         snap = self.ctl.snapshot

@@ -5,7 +5,10 @@ import path from 'node:path';
 import jwt from 'jsonwebtoken';
 import { UserStore, ensureInitialUsers, UsersError } from '../src/auth/users.js';
 import { TokenService, RevocationList, loadOrCreateKey } from '../src/auth/tokens.js';
-import { tempDir } from './helpers.js';
+import { tempDir, startBff, login } from './helpers.js';
+import { createBff } from '../src/app.js';
+import { readEnv } from '../src/config/env.js';
+import { sessionOf } from '../src/auth/session.js';
 
 test('users file holds scrypt hashes only, and authenticate checks them', async () => {
   const dir = tempDir();
@@ -93,15 +96,11 @@ test('tokens: valid ones pass; forged, expired, alg:none, wrong-key and revoked 
 });
 
 test('a BFF restart keeps sessions (same key in DATA_DIR); a new key ends them', async () => {
-  const { startBff, login } = await import('./helpers.js');
-  const { createBff } = await import('../src/app.js');
-  const { readEnv } = await import('../src/config/env.js');
   const a = await startBff();
   const { cookie } = await login(a.base, 'admin', a.passwords.admin);
   await a.stop();
   const again = await createBff(readEnv({ DATA_DIR: a.dataDir, APP_DIR: a.env.appDir }), { log: () => {} });
   const req = { headers: { cookie } };
-  const { sessionOf } = await import('../src/auth/session.js');
   assert.equal(sessionOf(/** @type {any} */ (req), again.tokens, again.users)?.username, 'admin');
   again.close();
   fs.rmSync(path.join(a.dataDir, 'session.key'));

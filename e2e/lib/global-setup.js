@@ -1,8 +1,4 @@
-import fs from 'node:fs';
-import path from 'node:path';
 import { stackEnv, addUser, startStack } from './stack.js';
-
-export const STATE_FILE = path.join(process.env.TMPDIR || '/tmp', `cell-e2e-${process.env.E2E_PORT || 18080}.json`);
 
 export default async function globalSetup() {
   const port = Number(process.env.E2E_PORT || 18080);
@@ -15,9 +11,6 @@ export default async function globalSetup() {
   for (const [name, pw] of Object.entries(users)) addUser(env, name, name, pw);
   const stack = await startStack(env);
   process.env.E2E_ROS_MASTER_URI = env.ROS_MASTER_URI;
-  process.env.E2E_ROSBRIDGE_PORT = env.ROSBRIDGE_PORT;
-  process.env.E2E_DATA_DIR = env.DATA_DIR;
   process.env.E2E_USERS = JSON.stringify(users);
-  fs.writeFileSync(STATE_FILE, JSON.stringify({ pid: stack.proc.pid, dataDir: env.DATA_DIR }));
   globalThis.__cellStack = stack;
 }

@@ -65,7 +65,10 @@ export class TokenService {
     const token = jwt.sign({ role: user.role, sid }, this.key, {
       algorithm: ALG, subject: user.username, expiresIn: this.ttlS, jwtid: crypto.randomUUID(),
     });
-    this.newest.set(sid, Math.floor(Date.now() / 1000) + this.ttlS);
+    const now = Math.floor(Date.now() / 1000);
+    // One entry per live session: forget the ones whose newest token has expired.
+    for (const [k, exp] of this.newest) if (exp <= now) this.newest.delete(k);
+    this.newest.set(sid, now + this.ttlS);
     return token;
   }
   /** @param {string|undefined} token @returns {Claims|null} */

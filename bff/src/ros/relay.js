@@ -9,17 +9,14 @@ import { WebSocketServer, WebSocket } from 'ws';
  *   outbound: (ctx: ClientCtx, data: Buffer, isBinary: boolean) => Buffer}} Guard
  */
 
-/** Lets everything through (tests of the transport alone). @type {Guard} */
-export const openGuard = { inspect: (_c, data) => ({ forward: true, data, replies: [] }), outbound: (_c, data) => data };
-
 export class RosRelay {
   /**
    * @param {{upstreamUrl: string, authenticate: (req: import('node:http').IncomingMessage) => Session|null,
-   *   checkOrigin?: (req: import('node:http').IncomingMessage) => boolean, guard?: Guard,
+   *   checkOrigin?: (req: import('node:http').IncomingMessage) => boolean, guard: Guard,
    *   isValid?: (s: Session) => boolean, onClose?: (s: Session, stillOpen: number) => void,
    *   recheckMs?: number, log?: (msg: string) => void}} o
    */
-  constructor({ upstreamUrl, authenticate, checkOrigin = () => true, guard = openGuard, isValid = () => true,
+  constructor({ upstreamUrl, authenticate, checkOrigin = () => true, guard, isValid = () => true,
     onClose = () => {}, recheckMs = 1000, log = () => {} }) {
     Object.assign(this, { upstreamUrl, authenticate, checkOrigin, guard, isValid, onClose, log });
     this.wss = new WebSocketServer({ noServer: true, maxPayload: 16 * 1024 * 1024 });
