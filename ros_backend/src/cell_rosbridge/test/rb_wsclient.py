@@ -73,13 +73,24 @@ class WSClient:
     def recv_frame(self, timeout: Optional[float] = None) -> Tuple[int, bytes]:
         if timeout is not None:
             self.sock.settimeout(timeout)
-        b1, b2 = self._read(2)
-        opcode, n = b1 & 0x0F, b2 & 0x7F
-        if n == 126:
-            n = struct.unpack(">H", self._read(2))[0]
-        elif n == 127:
-            n = struct.unpack(">Q", self._read(8))[0]
-        payload = self._read(n)
+        taken: list[bytes] = []
+
+        def read(n: int) -> bytes:
+            taken.append(self._read(n))
+            return taken[-1]
+
+        try:
+            b1, b2 = read(2)
+            opcode, n = b1 & 0x0F, b2 & 0x7F
+            if n == 126:
+                n = struct.unpack(">H", read(2))[0]
+            elif n == 127:
+                n = struct.unpack(">Q", read(8))[0]
+            payload = read(n)
+        except (socket.timeout, BlockingIOError):
+            # A timeout in the middle of a frame must not lose its header: put back what was read.
+            self._buf = b"".join(taken) + self._buf
+            raise
         if opcode == 8:
             raise WSClosed(f"close frame {payload[:2].hex()} {payload[2:].decode(errors='replace')}")
         if opcode == 9:  # ping -> pong
