@@ -12,11 +12,7 @@ mkdir -p "$STATE"
 log() { printf '[bootstrap] %s\n' "$*" >&2; }
 t0=$(date +%s)
 
-APT_PACKAGES=(ros-core python3-rospy python3-roslaunch python3-rosnode python3-rosservice python3-rostopic
-  python3-rosmsg python3-rosparam python3-rosgraph python3-std-msgs python3-std-srvs python3-sensor-msgs
-  python3-geometry-msgs python3-actionlib python3-actionlib-msgs ros-actionlib-msgs python3-catkin
-  ros-message-generation libstd-msgs-dev libsensor-msgs-dev libgeometry-msgs-dev libstd-srvs-dev libactionlib-msgs-dev
-  python3-tornado python3-websockets python3-venv python3-pykdl chromium fonts-dejavu-core openssl)
+mapfile -t APT_PACKAGES < <(sed -e 's/#.*//' -e '/^[[:space:]]*$/d' scripts/apt-packages.txt)
 
 # Stamp = hash of the files that define a stage; the stage reruns when they change.
 stamp_of() { cat "$@" 2>/dev/null | sha256sum | cut -c1-16; }
@@ -41,10 +37,14 @@ if want venv && [[ ! -x .venv/bin/python ]]; then
   log "creating .venv"
   /usr/bin/python3 -m venv --system-site-packages .venv
 fi
-s=$(stamp_of requirements.txt)
+s=$(stamp_of requirements.txt scripts/venv_first.py)
 if want venv && ! fresh pip "$s"; then
   log "pip install -r requirements.txt"
   .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt
+  # The venv's own packages must win over Debian's (see scripts/venv_first.py).
+  site=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+  cp scripts/venv_first.py "$site/_cell_venv_first.py"
+  echo "import _cell_venv_first" > "$site/_cell_venv_first.pth"
   mark pip "$s"
 fi
 
