@@ -9,6 +9,7 @@ import pytest
 import rospy
 import std_msgs.msg as std
 
+from cell_rosbridge.node import build_context
 from cell_rosbridge.outbox import ClientOutbox
 from cell_rosbridge.protocol import BridgeConfig, BridgeContext, Client
 from rb_helpers import node_publications, node_subscriptions, wait_for
@@ -39,7 +40,7 @@ class Harness:
 
 @pytest.fixture
 def ctx() -> BridgeContext:
-    context = BridgeContext(config=BridgeConfig(max_message_size=5000))
+    context = build_context(BridgeConfig(max_message_size=5000))
     yield context
     context.hub.shutdown()
     context.publishers.shutdown()
@@ -229,3 +230,31 @@ def test_subscribe_with_wrong_type_for_existing_topic(ros_node: str, h: Harness)
     assert h.statuses() == [status]
     assert h.client.subscriptions["/proto_typed_sub"].type_name == "std_msgs/String"
     pub.unregister()
+
+
+def test_dispatcher_and_capabilities_have_no_import_circle() -> None:
+    """protocol.py imports no capability; a capability imports neither protocol.py nor another capability."""
+    import ast
+    import pathlib
+    pkg = pathlib.Path(__file__).resolve().parents[1] / "src" / "cell_rosbridge"
+
+    def imported(path: pathlib.Path) -> List[str]:
+        names: List[str] = []
+        for node in ast.walk(ast.parse(path.read_text())):  # late imports inside functions count too
+            if isinstance(node, ast.ImportFrom):
+                base = "." * node.level + (node.module or "")
+                sep = "" if base.endswith(".") else "."
+                names += [base] + [base + sep + a.name for a in node.names]
+            elif isinstance(node, ast.Import):
+                names += [a.name for a in node.names]
+        return names
+
+    assert not [n for n in imported(pkg / "protocol.py") if "capabilities" in n]
+    ops = {p.stem for p in (pkg / "capabilities").glob("*.py") if p.stem != "__init__"}
+    for path in (pkg / "capabilities").glob("*.py"):
+        if path.stem == "__init__":
+            continue
+        names = imported(path)
+        assert not [n for n in names if "protocol" in n], path.name
+        assert not [n for n in names if n.startswith(".") and not n.startswith("..")
+                    and n.lstrip(".").split(".")[0] in ops], path.name

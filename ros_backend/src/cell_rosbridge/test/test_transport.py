@@ -11,7 +11,7 @@ import tornado.httpserver
 import tornado.ioloop
 import tornado.netutil
 
-from cell_rosbridge.protocol import BridgeConfig, BridgeContext
+from cell_rosbridge.node import build_context
 from cell_rosbridge.websocket_server import Janitor, RosbridgeHandler, make_app
 from rb_helpers import wait_for
 from rb_wsclient import WSClient
@@ -19,7 +19,7 @@ from rb_wsclient import WSClient
 
 class InProcessServer:
     def __init__(self) -> None:
-        self.context = BridgeContext(config=BridgeConfig())
+        self.context = build_context()
         self.clients: Set[RosbridgeHandler] = set()
         self.janitor = Janitor()
         sockets = tornado.netutil.bind_sockets(0, "127.0.0.1")

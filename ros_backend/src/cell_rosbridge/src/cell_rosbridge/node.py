@@ -5,11 +5,12 @@ import logging
 import os
 import signal
 import sys
-from typing import Any, Set
+from typing import Any, Optional, Set
 
 import rospy
 import tornado.ioloop
 
+from . import capabilities
 from .protocol import BridgeConfig, BridgeContext
 from .websocket_server import Janitor, RosbridgeHandler, make_app
 
@@ -19,6 +20,13 @@ log = logging.getLogger("rosbridge")
 def _param(name: str, default: Any) -> Any:
     value = rospy.get_param(name, default)
     return type(default)(value) if default is not None else value
+
+
+def build_context(config: Optional[BridgeConfig] = None) -> BridgeContext:
+    """The shared server state with every rosbridge op registered (the dispatcher imports no op)."""
+    context = BridgeContext(config=config or BridgeConfig())
+    capabilities.register_all(context)
+    return context
 
 
 def main(argv: Any = None) -> None:
@@ -39,8 +47,10 @@ def main(argv: Any = None) -> None:
         max_client_buffer=_param("~max_client_buffer", BridgeConfig.max_client_buffer),
         default_queue_length=_param("~default_queue_length", BridgeConfig.default_queue_length),
         service_request_timeout=_param("~service_request_timeout", BridgeConfig.service_request_timeout),
+        publisher_replay_window=_param("~publisher_replay_window", BridgeConfig.publisher_replay_window),
+        publisher_replay_max=_param("~publisher_replay_max", BridgeConfig.publisher_replay_max),
     )
-    context = BridgeContext(config=cfg)
+    context = build_context(cfg)
     clients: Set[RosbridgeHandler] = set()
     loop = tornado.ioloop.IOLoop.current()
     janitor = Janitor()

@@ -6,26 +6,20 @@ errors, fragments, resource release) lives here and in capabilities/, so it is t
 from __future__ import annotations
 
 import itertools
-import math
 import logging
 import re
 import threading
 from dataclasses import dataclass, field
-from typing import Any, Callable, Dict, Hashable, List, Optional, Tuple
+from typing import Any, Dict, Hashable, List, Optional
 
 from . import encoding
 from .conversion import ConversionError, UnknownTypeError
 from .encoding import Frame
+from .op_base import LEVELS, Finalizer, Handler, ProtocolError
 from .outbox import CONTROL, ClientOutbox
 from .ros_plumbing import PublisherRegistry, ServiceCallError, TopicError, TopicHub
 
 log = logging.getLogger("rosbridge")
-
-LEVELS = {"info": 0, "warning": 1, "error": 2, "none": 3}
-
-
-class ProtocolError(ValueError):
-    """A request the client got wrong; reported as a status error naming op and id."""
 
 
 @dataclass
@@ -36,20 +30,36 @@ class BridgeConfig:
     service_request_timeout: float = 30.0  # how long a ROS caller waits for a browser-served service
     max_pending_calls: int = 32  # concurrent call_service per client
     max_fragment_buffers: int = 16  # concurrent incomplete incoming fragmented messages per client
+    # A new publisher keeps what it sends in its first seconds for ROS subscribers still connecting.
+    publisher_replay_window: float = 1.0  # seconds after the publisher is created; 0 disables
+    publisher_replay_max: int = 100  # messages kept per new publisher (oldest dropped first)
 
 
 @dataclass
 class BridgeContext:
-    """What all clients of one server share."""
+    """What all clients of one server share, including the ops they can use.
+
+    The dispatcher knows no op itself: whoever builds the server registers them (node.build_context,
+    capabilities.register_all), so this module never imports the capabilities.
+    """
     config: BridgeConfig = field(default_factory=BridgeConfig)
     hub: TopicHub = field(default_factory=TopicHub)
     publishers: Optional[PublisherRegistry] = None
     services: Dict[str, Any] = field(default_factory=dict)  # service name -> AdvertisedService
     lock: threading.RLock = field(default_factory=threading.RLock)
+    handlers: Dict[str, Handler] = field(default_factory=dict)  # op -> handler
+    finalizers: List[Finalizer] = field(default_factory=list)  # release a finished client's resources
 
     def __post_init__(self) -> None:
         if self.publishers is None:
-            self.publishers = PublisherRegistry(self.hub)
+            self.publishers = PublisherRegistry(self.hub, self.config.publisher_replay_window,
+                                                self.config.publisher_replay_max)
+
+    def register(self, op: str, handler: Handler) -> None:
+        self.handlers[op] = handler
+
+    def add_finalizer(self, finalizer: Finalizer) -> None:
+        self.finalizers.append(finalizer)
 
 
 _ids = itertools.count(1)
@@ -57,47 +67,15 @@ _OP_RE = re.compile(r'"op"\s*:\s*"([^"]{1,64})"')
 _ID_RE = re.compile(r'"id"\s*:\s*("(?:[^"\\]|\\.){0,200}"|-?\d{1,20})')
 
 
-def require(msg: Dict[str, Any], name: str, kind: type | Tuple[type, ...], what: str = "") -> Any:
-    if name not in msg:
-        raise ProtocolError(f"missing field '{name}'")
-    return check(msg, name, kind, None)
-
-
-def check(msg: Dict[str, Any], name: str, kind: type | Tuple[type, ...], default: Any) -> Any:
-    """Optional field with a type check (bool is not accepted where a number is meant)."""
-    value = msg.get(name, default)
-    if value is None:
-        return default
-    kinds = kind if isinstance(kind, tuple) else (kind,)
-    if isinstance(value, bool) and bool not in kinds:
-        raise ProtocolError(f"field '{name}' must be {'/'.join(k.__name__ for k in kinds)}, got bool")
-    if not isinstance(value, kinds):
-        raise ProtocolError(f"field '{name}' must be {'/'.join(k.__name__ for k in kinds)}, "
-                            f"got {type(value).__name__}")
-    return value
-
-
-def number(msg: Dict[str, Any], name: str, default: Optional[float], minimum: float = 0.0,
-           maximum: float = 1e9) -> Any:
-    """Optional finite number field within [minimum, maximum] (JSON/CBOR can carry NaN, inf, 1e308)."""
-    value = check(msg, name, (int, float), default)
-    if value is None:
-        return None
-    if not math.isfinite(value) or not minimum <= value <= maximum:
-        raise ProtocolError(f"field '{name}' must be a number in [{minimum:g}, {maximum:g}], got {value!r}")
-    return value
-
-
 class Client:
     """Protocol state of one connection."""
 
     def __init__(self, context: BridgeContext, outbox: ClientOutbox, name: str = "") -> None:
-        from .capabilities import HANDLERS  # late import: capabilities import this module
         self.id = next(_ids)
         self.name = name or f"client{self.id}"
         self.context = context
         self.outbox = outbox
-        self.handlers: Dict[str, Callable[["Client", Dict[str, Any]], None]] = HANDLERS
+        self.handlers: Dict[str, Handler] = context.handlers  # shared, registered by the builder
         self.status_level = LEVELS["error"]
         self.subscriptions: Dict[str, Any] = {}  # topic -> capabilities.subscribe.TopicSubscription
         self.advertised: Dict[str, int] = {}  # topic -> number of advertise calls (informational)
@@ -189,8 +167,7 @@ class Client:
             if self.finished:
                 return
             self.finished = True
-        from .capabilities import FINALIZERS
-        for fin in FINALIZERS:
+        for fin in self.context.finalizers:
             try:
                 fin(self)
             except Exception:

@@ -16,6 +16,7 @@ import rosservice
 
 from . import conversion, encoding
 from .encoding import Frame
+from .replay import ReplayBuffer
 
 log = logging.getLogger("rosbridge")
 _message_ids = itertools.count(1)
@@ -187,21 +188,108 @@ class TopicHub:
             self._subs.clear()
 
 
+class ReplayListener(rospy.SubscribeListener):
+    """Hands a new publisher's first messages (ReplayBuffer) to subscribers whose connection came late.
+
+    Works on the rospy _PublisherImpl (shared by every rospy.Publisher of the topic in this process).
+    Peers are connection objects: a connection that replaces another one of the same node (rospy drops
+    the old one, with whatever it still had queued) counts as new and gets the whole replay.
+    Lock order: the impl's publock, then its c_lock; rospy never takes them the other way round.
+    """
+
+    def __init__(self, impl: Any, buffer: ReplayBuffer[Any]) -> None:
+        self._impl = impl
+        self.buffer = buffer
+
+    def publish(self, pub: rospy.Publisher, msg: Any) -> bool:
+        """Publish and keep `msg`; False (nothing done) once the window is over."""
+        impl = self._impl
+        impl.acquire()
+        try:
+            if impl.closed or not self.buffer.is_open():
+                return False
+            # No subscriber may join between listing who gets this message and writing it: it would
+            # get it now and once more from the replay.
+            with impl.c_lock:
+                reached = list(impl.connections)
+                pub.publish(msg)
+            self.buffer.record(msg, reached)
+            return True
+        finally:
+            impl.release()
+
+    def peer_subscribe(self, topic_name: str, topic_publish: Any, peer_publish: Any) -> None:
+        # Called by rospy in the new connection's thread, after the connection joined the impl and
+        # before a latching publisher's last message is sent to it.
+        impl = self._impl
+        impl.acquire()  # no publish can slip between the replayed messages: order is kept
+        try:
+            if impl.closed or not self.buffer.is_open():
+                return
+            latch = impl.latch if impl.is_latch else None
+            # Every connection, not just this call's: another one may have joined meanwhile; the
+            # buffer knows who got what, so nobody receives a message twice.
+            for conn in list(impl.connections):
+                for msg in self.buffer.missed(conn, skip=latch):
+                    impl.publish(msg, connection_override=conn)
+            if impl.is_latch:
+                impl.latch = latch  # impl.publish latched the replayed (older) message: undo that
+        except Exception:  # never break rospy's connection setup
+            log.exception("replay to a new subscriber of %s failed", topic_name)
+        finally:
+            impl.release()
+
+    def detach(self) -> None:
+        impl = self._impl
+        impl.acquire()  # peer_subscribe may be walking the buffer in rospy's thread
+        try:
+            self.buffer.close()
+        finally:
+            impl.release()
+        listeners = getattr(self._impl, "subscriber_listeners", None)
+        if listeners:
+            # A new list, not remove(): rospy may be iterating over the old one in another thread.
+            self._impl.subscriber_listeners = [x for x in listeners if x is not self]
+
+
 class SharedPublisher:
-    def __init__(self, topic: str, type_name: str, msg_cls: type, latch: bool, queue_size: int) -> None:
+    def __init__(self, topic: str, type_name: str, msg_cls: type, latch: bool, queue_size: int,
+                 replay_window: float = 1.0, replay_max: int = 100) -> None:
         self.topic, self.type_name, self.msg_cls, self.latch = topic, type_name, msg_cls, latch
         self.clients: Set[Hashable] = set()
         self.pub = rospy.Publisher(topic, msg_cls, latch=latch, queue_size=max(1, queue_size),
                                    tcp_nodelay=True)
+        self._replay: Optional[ReplayListener] = None
+        if replay_window > 0 and replay_max > 0:
+            # Started after the master registration above: the window covers the time existing
+            # subscribers need to hear of us and connect.
+            self._replay = ReplayListener(self.pub.impl, ReplayBuffer(replay_window, replay_max))
+            self.pub.impl.add_subscriber_listener(self._replay)
+
+    def publish(self, msg: Any) -> None:
+        replay = self._replay
+        if replay is not None:
+            if replay.publish(self.pub, msg):
+                return
+            self._replay = None  # window over: plain publishing from now on
+            replay.detach()
+        self.pub.publish(msg)
+
+    def unregister(self) -> None:
+        replay, self._replay = self._replay, None
+        if replay is not None:
+            replay.detach()
+        self.pub.unregister()
 
 
 class PublisherRegistry:
     """Shared publishers by topic; each client that advertised (or published) holds a reference."""
 
-    def __init__(self, hub: TopicHub) -> None:
+    def __init__(self, hub: TopicHub, replay_window: float = 1.0, replay_max: int = 100) -> None:
         self._pubs: Dict[str, SharedPublisher] = {}
         self._lock = threading.RLock()
         self._hub = hub
+        self._replay = (replay_window, replay_max)
 
     def count(self) -> int:
         return len(self._pubs)
@@ -224,7 +312,8 @@ class PublisherRegistry:
                     wanted, msg_cls = actual, conversion.get_message_class(actual)
                 else:
                     raise TopicError(f"topic {topic} does not exist and no type was given")
-                pub = self._pubs[topic] = SharedPublisher(topic, wanted, msg_cls, latch, queue_size)
+                pub = self._pubs[topic] = SharedPublisher(topic, wanted, msg_cls, latch, queue_size,
+                                                          *self._replay)
             elif type_name and conversion.normalize_type(type_name) != pub.type_name:
                 raise TopicError(f"topic {topic} already has type {pub.type_name}, not {type_name}")
             pub.clients.add(client)
@@ -238,13 +327,13 @@ class PublisherRegistry:
             pub.clients.discard(client)
             if not pub.clients:
                 del self._pubs[topic]
-                pub.pub.unregister()
+                pub.unregister()
             return True
 
     def shutdown(self) -> None:
         with self._lock:
             for pub in self._pubs.values():
-                pub.pub.unregister()
+                pub.unregister()
             self._pubs.clear()
 
 

@@ -1,11 +1,16 @@
-"""One module per rosbridge op; HANDLERS maps op -> handler, FINALIZERS release a client's resources."""
+"""One module per rosbridge op; HANDLERS maps op -> handler, FINALIZERS release a client's resources.
+
+The modules import only op_base / conversion / ros_plumbing (never protocol.py or each other);
+`register_all` wires them into a BridgeContext, called by whoever builds the server (node.build_context).
+"""
 from __future__ import annotations
 
-from typing import Any, Callable, Dict, List
+from typing import Dict, List, Protocol
 
+from ..op_base import Finalizer, Handler
 from . import advertise, advertise_service, call_service, fragment, publish, status, subscribe
 
-HANDLERS: Dict[str, Callable[[Any, Dict[str, Any]], None]] = {
+HANDLERS: Dict[str, Handler] = {
     "advertise": advertise.advertise,
     "unadvertise": advertise.unadvertise,
     "publish": publish.publish,
@@ -21,4 +26,20 @@ HANDLERS: Dict[str, Callable[[Any, Dict[str, Any]], None]] = {
     "fragment": fragment.fragment,
 }
 
-FINALIZERS: List[Callable[[Any], None]] = [subscribe.finish, advertise.finish, advertise_service.finish]
+FINALIZERS: List[Finalizer] = [subscribe.finish, advertise.finish, advertise_service.finish]
+
+
+class Registry(Protocol):
+    """What register_all needs of a BridgeContext (structural, so this package never imports protocol)."""
+
+    def register(self, op: str, handler: Handler) -> None: ...
+
+    def add_finalizer(self, finalizer: Finalizer) -> None: ...
+
+
+def register_all(context: Registry) -> None:
+    """Register every op and cleanup step with a dispatcher context."""
+    for op, handler in HANDLERS.items():
+        context.register(op, handler)
+    for finalizer in FINALIZERS:
+        context.add_finalizer(finalizer)

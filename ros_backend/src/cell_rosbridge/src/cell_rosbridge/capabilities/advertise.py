@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Any, Dict
 
-from ..protocol import check, number, require
+from ..op_base import check, number, register_publisher, require
 from ..ros_plumbing import resolve_topic
 
 
@@ -12,22 +12,7 @@ def advertise(client: Any, msg: Dict[str, Any]) -> None:
     type_name = require(msg, "type", str)
     latch = check(msg, "latch", bool, False)
     queue_size = int(number(msg, "queue_size", 100, maximum=100_000))
-    _register(client, topic, type_name, latch, queue_size)
-
-
-def _register(client: Any, topic: str, type_name: Any, latch: bool, queue_size: int) -> Any:
-    with client.lock:
-        pub = client.context.publishers.register(client.id, topic, type_name, latch, queue_size)
-        client.advertised[topic] = client.advertised.get(topic, 0) + 1
-        return pub
-
-
-def ensure_publisher(client: Any, topic: str, latch: bool) -> Any:
-    """publish without advertise: rosbridge registers implicitly when the topic's type is known."""
-    pub = client.context.publishers.get(topic)
-    if pub is not None and client.id in pub.clients:
-        return pub
-    return _register(client, topic, None, latch, 100)
+    register_publisher(client, topic, type_name, latch, queue_size)
 
 
 def unadvertise(client: Any, msg: Dict[str, Any]) -> None:

@@ -13,7 +13,7 @@ from typing import Any, Dict, Tuple
 import rospy
 
 from .. import conversion
-from ..protocol import ProtocolError, check, require
+from ..op_base import ProtocolError, check, require
 from ..ros_plumbing import resolve_topic
 
 _request_ids = itertools.count(1)

@@ -9,9 +9,8 @@ import threading
 from typing import Any, Dict
 
 from .. import conversion
-from ..protocol import ProtocolError, check, number, require
+from ..op_base import COMPRESSIONS, ProtocolError, check, number, require
 from ..ros_plumbing import ServiceCallError, call_service as ros_call, resolve_topic
-from .subscribe import COMPRESSIONS
 
 
 def call_service(client: Any, msg: Dict[str, Any]) -> None:

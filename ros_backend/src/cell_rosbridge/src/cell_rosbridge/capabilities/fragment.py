@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Any, Dict
 
-from ..protocol import ProtocolError, check, require
+from ..op_base import ProtocolError, require
 
 MAX_FRAGMENTS = 100_000
 

@@ -4,9 +4,8 @@ from __future__ import annotations
 from typing import Any, Dict, List
 
 from .. import conversion
-from ..protocol import check, require
+from ..op_base import check, ensure_publisher, require
 from ..ros_plumbing import resolve_topic
-from .advertise import ensure_publisher
 
 
 def publish(client: Any, msg: Dict[str, Any]) -> None:
@@ -19,4 +18,4 @@ def publish(client: Any, msg: Dict[str, Any]) -> None:
     if missing:  # spec: a subset of the type is published with defaults, plus a warning
         client.status("warning", f"fields defaulted: {', '.join(missing[:20])}", op="publish",
                       msg_id=msg.get("id"))
-    pub.pub.publish(ros_msg)
+    pub.publish(ros_msg)  # through the replay buffer: subscribers may still be connecting

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Any, Dict
 
-from ..protocol import LEVELS
+from ..op_base import LEVELS
 
 
 def set_level(client: Any, msg: Dict[str, Any]) -> None:

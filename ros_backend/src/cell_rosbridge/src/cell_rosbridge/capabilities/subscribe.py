@@ -11,10 +11,10 @@ import itertools
 from dataclasses import dataclass
 from typing import Any, Dict, Hashable, Optional, Tuple
 
-from ..protocol import ProtocolError, check, number, require
+from ..conversion import normalize_type
+from ..op_base import COMPRESSIONS, ProtocolError, check, number, require
 from ..ros_plumbing import SharedMessage, resolve_topic
 
-COMPRESSIONS = ("none", "png", "cbor", "cbor-raw")
 _anon = itertools.count(1)
 
 
@@ -77,7 +77,7 @@ def subscribe(client: Any, msg: Dict[str, Any]) -> None:
                 raise
             client.subscriptions[topic] = sub
             return
-        if type_name and sub.type_name and _norm(type_name) != sub.type_name:
+        if type_name and sub.type_name and normalize_type(type_name) != sub.type_name:
             raise ProtocolError(f"topic {topic} has type {sub.type_name}, not {type_name}")
         sub.sids[sid] = params
         sub.update()
@@ -86,11 +86,6 @@ def subscribe(client: Any, msg: Dict[str, Any]) -> None:
     last = hub.latched(topic)
     if last is not None:
         sub.on_message(last)
-
-
-def _norm(type_name: str) -> str:
-    from ..conversion import normalize_type
-    return normalize_type(type_name)
 
 
 def unsubscribe(client: Any, msg: Dict[str, Any]) -> None:
