@@ -2,8 +2,10 @@ import { sveltekit } from '@sveltejs/kit/vite';
 import { SvelteKitPWA } from '@vite-pwa/sveltekit';
 import { defineConfig } from 'vite';
 
-const bff = `http://127.0.0.1:${process.env.BFF_PORT || 8080}`;
-const testing = !!process.env.VITEST;
+// (process via globalThis: the app's checkJs has no Node types.)
+const env = /** @type {any} */ (globalThis).process.env;
+const bff = `http://127.0.0.1:${env.BFF_PORT || 8080}`;
+const testing = !!env.VITEST;
 
 export default defineConfig({
   plugins: [

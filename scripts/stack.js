@@ -2,16 +2,21 @@
 // `npm start`: roscore (unless ROS_MASTER_URI answers), the simulated cell, the ROS side and the BFF.
 // Every child runs in its own process group and carries a stack marker in its environment, so Ctrl-C
 // stops all of them (roslaunch's nodes live in their own sessions) within 5 s and leaves nothing behind.
+// A watchdog (scripts/watchdog.js, detached) stops them too if this supervisor dies, even by SIGKILL.
 import { spawn } from 'node:child_process';
 import crypto from 'node:crypto';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { readEnv, REPO_ROOT } from '../bff/src/config/env.js';
-import { loadCell, CellConfigError } from '../bff/src/config/cell.js';
-import { masterOnline } from '../bff/src/ros/health.js';
+import { fileURLToPath } from 'node:url';
+import { readEnv, REPO_ROOT } from '../bff/src/core/config/env.js';
+import { loadCell, CellConfigError } from '../bff/src/core/config/cell.js';
+import { FEATURES } from '../bff/src/features/index.js';
+import { launchFiles } from './feature-launch.js';
+import { masterOnline } from '../bff/src/core/ros/health.js';
 
 const env = readEnv();
+const urHost = process.env.UR_HOST || '127.0.0.1'; // the UR controller, or where the simulated one listens
 const STACK_ID = crypto.randomUUID();
 const rosHome = path.join(env.dataDir, 'ros');
 fs.mkdirSync(rosHome, { recursive: true });
@@ -26,7 +31,7 @@ const childEnv = {
   CELL_CONFIG: env.cellConfig,
   DATA_DIR: env.dataDir,
   USERS_FILE: env.usersFile,
-  UR_HOST: env.urHost,
+  UR_HOST: urHost,
   PORT: String(env.port),
   TLS_PORT: String(env.tlsPort),
   ROS_HOME: process.env.ROS_HOME || rosHome,
@@ -38,12 +43,52 @@ const childEnv = {
 const children = [];
 let stopping = false;
 
+// The watchdog runs in its own session and holds the read end of a pipe whose write end only this process
+// has: when the supervisor dies, however it dies, the watchdog sees EOF and stops every process of the stack
+// (child groups and marked processes). It starts before the first child and learns each child's group as it
+// starts; a child spawned at the moment of a SIGKILL is still found by its marker. After a clean shutdown,
+// `done` + EOF make it check that nothing is left and exit.
+const WATCHDOG = fileURLToPath(new URL('./watchdog.js', import.meta.url));
+/** @type {import('node:child_process').ChildProcess | null} */
+let watchdog = null;
+let watchdogRestarts = 0;
+
+function startWatchdog() {
+  const groups = children.filter((c) => c.proc.pid && !exited(c.proc)).map((c) => String(c.proc.pid));
+  const wd = spawn(process.execPath, [WATCHDOG, STACK_ID, String(process.pid), ...groups],
+    { detached: true, stdio: ['pipe', 'ignore', 'inherit'] });
+  wd.stdin.on('error', () => { /* it died: see 'exit' */ });
+  wd.on('error', (e) => log(`watchdog: ${e.message}`));
+  wd.on('exit', (code, sig) => {
+    if (stopping || wd !== watchdog) return;
+    if (++watchdogRestarts > 5) { log(`warning: the watchdog exited (${sig || code}) again; running without one`); return; }
+    log(`the watchdog exited (${sig || code}); restarting it`);
+    watchdog = startWatchdog();
+  });
+  return wd;
+}
+
+/** Tell the watchdog about a new child group. */
+function watch(pid) {
+  if (pid && watchdog?.stdin?.writable) watchdog.stdin.write(`group ${pid}\n`);
+}
+
+/** After a clean shutdown: let the watchdog check that nothing is left, and wait for it to exit. */
+async function stopWatchdog(ms) {
+  const wd = watchdog;
+  if (!wd || exited(wd)) return;
+  const gone = new Promise((r) => wd.once('exit', r));
+  if (wd.stdin.writable) wd.stdin.end('done\n');
+  await Promise.race([gone, new Promise((r) => setTimeout(r, ms))]);
+}
+
 /** Start a command inside the ROS environment (scripts/ros-env.sh). */
 function startRos(name, command, essential = true) {
   return start(name, 'bash', ['-c', `source scripts/ros-env.sh && exec ${command}`], essential);
 }
 
 function start(name, cmd, args, essential = true) {
+  if (!watchdog) watchdog = startWatchdog();
   const proc = spawn(cmd, args, { cwd: REPO_ROOT, env: childEnv, detached: true, stdio: ['ignore', 'pipe', 'pipe'] });
   const prefix = (stream, out) => stream.on('data', (d) => {
     for (const line of d.toString().split('\n')) {
@@ -58,6 +103,7 @@ function start(name, cmd, args, essential = true) {
     if (essential) shutdown(1);
   });
   children.push({ name, proc, essential });
+  watch(proc.pid);
   return proc;
 }
 
@@ -103,6 +149,7 @@ async function shutdown(code = 0) {
   }
   for (const pid of markedPids()) try { process.kill(pid, 'SIGKILL'); } catch { /* gone */ }
   await waitUntil(() => markedPids().every((p) => !alive(p)), 400);
+  await stopWatchdog(Math.max(300, deadline - Date.now()));
   log('stopped');
   process.exit(code);
 }
@@ -124,7 +171,7 @@ setInterval(() => { if (process.ppid !== parent) shutdown(1); }, 500).unref();
 async function main() {
   let cell;
   try {
-    cell = loadCell(env.cellConfig);
+    cell = loadCell(env.cellConfig, FEATURES);
   } catch (e) {
     if (e instanceof CellConfigError) { console.error(e.message); process.exit(2); }
     throw e;
@@ -138,14 +185,15 @@ async function main() {
   }
   const simulated = cell.robot?.simulated !== false && process.env.UR_SIM !== '0';
   if (simulated && fs.existsSync(path.join(REPO_ROOT, 'sim/__main__.py'))) {
-    log(`starting the simulated UR5 cell at ${env.urHost}`);
+    log(`starting the simulated UR5 cell at ${urHost}`);
     // SIM_ARGS: extra `python -m sim` options, e.g. "--no-cameras" or "--camera-size 320x240".
     const extra = (process.env.SIM_ARGS || '').split(/\s+/).filter(Boolean).map(shellQuote).join(' ');
-    startRos('sim', `python -m sim --host ${shellQuote(env.urHost)} ${extra}`, false);
+    startRos('sim', `python -m sim --host ${shellQuote(urHost)} ${extra}`, false);
   } else {
-    log(`robot: UR controller at ${env.urHost}`);
+    log(`robot: UR controller at ${urHost}`);
   }
-  startRos('ros', `roslaunch --wait cell_bringup cell.launch cell_config:=${shellQuote(env.cellConfig)} rosbridge_port:=${env.rosbridgePort}`);
+  const launches = launchFiles(cell, path.join(REPO_ROOT, 'ros_backend/src/cell_bringup')).map(shellQuote).join(' ');
+  startRos('ros', `roslaunch --wait ${launches} cell_config:=${shellQuote(env.cellConfig)} rosbridge_port:=${env.rosbridgePort}`);
   start('bff', process.execPath, [path.join(REPO_ROOT, 'bff/src/server.js')]);
   /** @returns {Promise<any>} */
   const health = async () => {

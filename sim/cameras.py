@@ -1,8 +1,10 @@
-"""Two simulated cameras (workbench, global) rendered in a separate process so physics keeps real time.
+"""The sim's camera viewpoints (VIEWS), rendered in a separate process so physics keeps real time.
 
-The render process holds a replica of the cell (same construction code, no physics stepping). At the camera
-rate the main process sends it a snapshot of joint positions and part poses; it renders both views
-(EGL renderer plugin when it loads, TinyRenderer otherwise), JPEG-encodes them and sends the bytes back.
+The cell file's video streams choose among these viewpoints (sim/cell_file.py); several streams may show one
+viewpoint, which is then rendered once. The render process holds a replica of the cell (same construction
+code, no physics stepping). At the camera rate the main process sends it a snapshot of joint positions and
+part poses and the viewpoints wanted; it renders those (EGL renderer plugin when it loads, TinyRenderer
+otherwise), JPEG-encodes them and sends the bytes back.
 """
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ import multiprocessing as mp
 import threading
 import time
 from dataclasses import dataclass
-from typing import Callable, Optional
+from typing import Callable, Iterable, Optional
 
 from .pacing import Pacer
 
@@ -30,14 +32,15 @@ class CameraSpec:
     fov: float = 60.0
 
 
-CAMERAS = (
+# The one table of viewpoints. Order matters: video streams without `view` get them in this order (cycling).
+VIEWS: dict[str, CameraSpec] = {cam.name: cam for cam in (
     CameraSpec("workbench", eye=(-0.95, 0.05, 0.75), target=(-0.4, 0.05, 0.0), fov=55.0),
     CameraSpec("global", eye=(1.1, -1.5, 1.3), target=(-0.25, 0.0, 0.15), fov=60.0),
-)
+)}
 
 
 def _render_main(conn, seed: int, urdf_path: str, size: tuple[int, int]) -> None:
-    """Render process: build the replica, then answer (snapshot, camera names) -> [(name, jpeg, ms)] until told to stop."""
+    """Render process: build the replica, then answer (snapshot, view names) -> [(view, jpeg, ms)] until told to stop."""
     import os
     import signal
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group: the parent stops us
@@ -58,7 +61,7 @@ def _render_main(conn, seed: int, urdf_path: str, size: tuple[int, int]) -> None
     renderer = pybullet.ER_BULLET_HARDWARE_OPENGL if world.egl else pybullet.ER_TINY_RENDERER
     w, h = size
     views = []
-    for cam in CAMERAS:
+    for cam in VIEWS.values():
         views.append((cam.name, p.computeViewMatrix(cam.eye, cam.target, (0, 0, 1)),
                       p.computeProjectionMatrixFOV(fov=cam.fov, aspect=w / h, nearVal=0.05, farVal=6.0)))
     conn.send(("ready", "egl" if renderer == pybullet.ER_BULLET_HARDWARE_OPENGL else "tiny"))
@@ -84,9 +87,15 @@ def _render_main(conn, seed: int, urdf_path: str, size: tuple[int, int]) -> None
 
 
 class CameraRig:
-    """Drives the render process at the camera rate and hands JPEG frames to a publisher callback."""
+    """Drives the render process at the camera rate and hands JPEG frames (per viewpoint) to a publisher callback."""
 
-    def __init__(self, world, size: tuple[int, int], rate: float, speed: float = 1.0) -> None:
+    def __init__(self, world, size: tuple[int, int], rate: float, speed: float = 1.0,
+                 views: Optional[Iterable[str]] = None) -> None:
+        """`views`: the viewpoints the cell's streams use (None: all of VIEWS); others are never rendered."""
+        self.views = set(VIEWS if views is None else views)
+        unknown = self.views - set(VIEWS)
+        if unknown:
+            raise ValueError(f"unknown camera views: {sorted(unknown)}")
         self.world = world
         self.size = size
         self.period = 1.0 / rate
@@ -105,7 +114,7 @@ class CameraRig:
 
     def start(self, controller, publish: Optional[Callable[[str, bytes], None]],
               watched: Optional[Callable[[], set[str]]] = None) -> None:
-        """`watched` names the cameras someone subscribes to; only those are rendered (None: all of them)."""
+        """`watched` names the viewpoints someone subscribes to; only those are rendered (None: all of them)."""
         self._thread = threading.Thread(target=self._loop, args=(controller, publish, watched), name="cameras", daemon=True)
         self._thread.start()
 
@@ -128,10 +137,9 @@ class CameraRig:
         self.ready = True
         log.info("cameras: %dx%d at %.3g Hz, renderer %s", self.size[0], self.size[1], 1 / self.period, self.renderer)
         pacer = Pacer(self.period, self._stop)
-        all_names = {c.name for c in CAMERAS}
         while not self._stop.is_set():
             # Rendering is the costliest thing the cell does: skip the views nobody watches.
-            wanted = all_names if watched is None else set(watched()) & all_names
+            wanted = self.views if watched is None else set(watched()) & self.views
             if not wanted:
                 pacer.wait()
                 continue

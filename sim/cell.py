@@ -1,11 +1,15 @@
-"""Wires one simulated cell together: world, controller loop, UR servers, and optionally cameras and ROS."""
+"""Wires one simulated cell together: world, controller loop, UR servers, and optionally cameras and ROS.
+
+Which devices are published where comes from the cell file (`CellOptions.devices`, see sim/cell_file.py).
+"""
 from __future__ import annotations
 
 import logging
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
+from .cell_file import CellDevices
 from .controller import Controller
 from .dashboard import DashboardServer
 from .rtde_server import RTDEServer
@@ -29,6 +33,8 @@ class CellOptions:
     cameras: bool = True
     ros: bool = True
     powered: bool = True
+    # The cell file's devices (parse_args reads the file); the default declares none, so nothing is published.
+    devices: CellDevices = field(default_factory=CellDevices)
 
 
 class Cell:
@@ -45,14 +51,16 @@ class Cell:
     def start(self) -> None:
         for s in self.servers:
             s.start()
-        if self.opts.cameras:
+        # No video stream in the cell file: no render process at all.
+        if self.opts.cameras and self.opts.devices.streams:
             from .cameras import CameraRig
-            self.cameras = CameraRig(self.world, self.opts.camera_size, self.opts.camera_rate, self.opts.speed)
+            self.cameras = CameraRig(self.world, self.opts.camera_size, self.opts.camera_rate, self.opts.speed,
+                                     views=self.opts.devices.views)
         if self.opts.ros:
             from .ros_bridge import RosBridge, ros_master_online
             if ros_master_online():
                 try:
-                    self.ros = RosBridge(self.controller, self.opts.sensor_rate, self.opts.speed)
+                    self.ros = RosBridge(self.controller, self.opts.devices, self.opts.sensor_rate, self.opts.speed)
                 except ImportError as e:  # e.g. cell_msgs not built yet: still serve the UR ports
                     log.error("ROS messages not importable (%s): build ros_backend; running without ROS", e)
                 else:
@@ -61,7 +69,7 @@ class Cell:
                 log.warning("ROS master not reachable: running without ROS")
         if self.cameras is not None:
             self.cameras.start(self.controller, self.ros.publish_image if self.ros else None,
-                               self.ros.watched_cameras if self.ros else None)
+                               self.ros.watched_views if self.ros else None)
         self._t0 = (time.monotonic(), self.controller.sim_time)
         self.controller.start(self.opts.speed)
 

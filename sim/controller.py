@@ -16,7 +16,7 @@ import numpy as np
 
 from . import kinematics as kin
 from . import motion
-from .safety import AlarmBook
+from .safety import FaultBook
 from .urdf import DEFAULT_TCP
 from .world import DT, ArmState, World
 
@@ -146,7 +146,7 @@ class Controller:
     def __init__(self, world: World, boot_powered: bool = True) -> None:
         self.world = world
         self.lock = threading.RLock()
-        self.alarms = AlarmBook()
+        self.faults = FaultBook()
         self.sim_time = 0.0
         self.tcp = np.array(DEFAULT_TCP)
         self.payload = 0.0
@@ -454,9 +454,9 @@ class Controller:
                 else:
                     self.arm.stop(PROTECTIVE_STOP_DECEL)
                 self.stop_program("stopped by protective stop")
-        self.alarms.set("protective_stop", True)
+        self.faults.set("protective_stop", True)
         if cause == "force_limit":
-            self.alarms.set("force_limit", True)
+            self.faults.set("force_limit", True)
 
     def unlock_protective_stop(self, force: bool = False) -> bool:
         with self.lock:
@@ -465,8 +465,8 @@ class Controller:
             if not force and self.sim_time - self.protective_stop_at < PROTECTIVE_STOP_UNLOCK_DELAY:
                 return False
             self.safety_mode = SafetyMode.SAFEGUARD_STOP if self.door_open else SafetyMode.NORMAL
-        self.alarms.set("protective_stop", False)
-        self.alarms.set("force_limit", False)
+        self.faults.set("protective_stop", False)
+        self.faults.set("force_limit", False)
         return True
 
     def set_door_open(self, is_open: bool) -> None:
@@ -482,12 +482,12 @@ class Controller:
                 self.safety_mode = SafetyMode.NORMAL
                 if self.runtime_state == RuntimeState.PAUSED and self.program is not None:
                     self.runtime_state = RuntimeState.PLAYING
-        self.alarms.set("door_open", is_open)
+        self.faults.set("door_open", is_open)
 
     def set_gripper_fault(self, active: bool) -> None:
         with self.lock:
             self.world.freeze_gripper(active)
-        self.alarms.set("gripper_fault", active)
+        self.faults.set("gripper_fault", active)
 
     def trigger_fault(self, fault: str) -> tuple[bool, str]:
         """The /sim/trigger_fault service: inject a fault, or 'reset' to clear them all."""

@@ -1,7 +1,11 @@
-"""ROS 1 side of the cell: sensor topics, camera images, the alarm list and the fault service.
+"""ROS 1 side of the simulated cell's devices: sensor topics, camera images, device faults, the fault service.
 
-Topics: /joint_states, /cell/wrench, /cell/tactile (sensor rate), /cell/camera/<name>/image/compressed,
-/cell/alarms (latched AlarmList). Service: /sim/trigger_fault (cell_msgs/TriggerFault).
+The device topics are the ones the cell file declares (sim/cell_file.py): the wrist F/T reading on every
+WrenchStamped sensor topic and the tactile pad on every Scatter sensor topic (sensor rate), one
+sensor_msgs/CompressedImage camera per video stream (camera rate, only while the topic has a subscriber).
+Fixed names: /joint_states (sensor rate), /sim/faults (latched cell_msgs/AlarmList: the devices' fault state,
+for the cell's alarms feature to turn into alarms; the sim publishes no alarm list itself), and the service
+/sim/trigger_fault (cell_msgs/TriggerFault).
 """
 from __future__ import annotations
 
@@ -9,9 +13,10 @@ import logging
 import threading
 from typing import Optional
 
+from .cell_file import CellDevices, Stream
 from .controller import Controller
 from .pacing import Pacer
-from .safety import Alarm
+from .safety import Fault
 from .urdf import ARM_JOINTS, FINGER_JOINTS
 
 log = logging.getLogger("sim.ros")
@@ -27,7 +32,7 @@ def ros_master_online() -> bool:
 
 
 class RosBridge:
-    def __init__(self, controller: Controller, sensor_rate: float, speed: float = 1.0,
+    def __init__(self, controller: Controller, devices: CellDevices, sensor_rate: float, speed: float = 1.0,
                  node_name: str = "sim_cell") -> None:
         import rospy
         from cell_msgs.msg import AlarmList, Scatter
@@ -50,11 +55,14 @@ class RosBridge:
                 logging.root.addHandler(h)
         logging.root.setLevel(root_level)
         self.pub_joints = rospy.Publisher("/joint_states", JointState, queue_size=10)
-        self.pub_wrench = rospy.Publisher("/cell/wrench", WrenchStamped, queue_size=10)
-        self.pub_tactile = rospy.Publisher("/cell/tactile", Scatter, queue_size=10)
-        self.pub_alarms = rospy.Publisher("/cell/alarms", AlarmList, queue_size=5, latch=True)
-        self.pub_images = {name: rospy.Publisher(f"/cell/camera/{name}/image/compressed", CompressedImage,
-                                                 queue_size=2) for name in ("workbench", "global")}
+        self.pub_wrench = [rospy.Publisher(t, WrenchStamped, queue_size=10) for t in devices.wrench_topics]
+        self.pub_tactile = [rospy.Publisher(t, Scatter, queue_size=10) for t in devices.tactile_topics]
+        # Latched: a node that starts later still learns which faults are active right now.
+        self.pub_faults = rospy.Publisher("/sim/faults", AlarmList, queue_size=5, latch=True)
+        self.pub_images: list[tuple[Stream, rospy.Publisher]] = [
+            (s, rospy.Publisher(s.topic, CompressedImage, queue_size=2)) for s in devices.streams]
+        for s in devices.streams:
+            log.info("camera %r on %s shows the %s view", s.name, s.topic, s.view)
         self._types = dict(AlarmList=AlarmList, Scatter=Scatter, WrenchStamped=WrenchStamped,
                            JointState=JointState, CompressedImage=CompressedImage)
         self.service = rospy.Service("/sim/trigger_fault", TriggerFault, self._trigger_fault)
@@ -63,7 +71,7 @@ class RosBridge:
         self.published = 0
 
     def start(self) -> None:
-        self.ctl.alarms.subscribe(self._publish_alarms)
+        self.ctl.faults.subscribe(self._publish_faults)
         self._thread = threading.Thread(target=self._sensor_loop, name="ros-sensors", daemon=True)
         self._thread.start()
 
@@ -86,8 +94,6 @@ class RosBridge:
 
     def _publish_sensors(self) -> None:
         snap = self.ctl.snapshot
-        with self.ctl.lock:  # contact queries touch the physics client
-            xs, forces = self.ctl.world.tactile()
         stamp = self.rospy.Time.now()
         js = self._types["JointState"]()
         js.header.stamp = stamp
@@ -96,42 +102,51 @@ class RosBridge:
         js.velocity = list(snap.actual_qd) + [0.0, 0.0]
         js.effort = list(snap.actual_current * 10.0) + [0.0, 0.0]
         self.pub_joints.publish(js)
-        w = self._types["WrenchStamped"]()
-        w.header.stamp = stamp
-        w.header.frame_id = "ft_sensor"
-        f = snap.ft_raw
-        w.wrench.force.x, w.wrench.force.y, w.wrench.force.z = float(f[0]), float(f[1]), float(f[2])
-        w.wrench.torque.x, w.wrench.torque.y, w.wrench.torque.z = float(f[3]), float(f[4]), float(f[5])
-        self.pub_wrench.publish(w)
-        t = self._types["Scatter"]()
-        t.header.stamp = stamp
-        t.header.frame_id = "finger_left_pad"
-        t.x, t.y = xs, forces
-        self.pub_tactile.publish(t)
+        if self.pub_wrench:
+            w = self._types["WrenchStamped"]()
+            w.header.stamp = stamp
+            w.header.frame_id = "ft_sensor"
+            f = snap.ft_raw
+            w.wrench.force.x, w.wrench.force.y, w.wrench.force.z = float(f[0]), float(f[1]), float(f[2])
+            w.wrench.torque.x, w.wrench.torque.y, w.wrench.torque.z = float(f[3]), float(f[4]), float(f[5])
+            for pub in self.pub_wrench:
+                pub.publish(w)
+        if self.pub_tactile:  # the contact query holds the physics lock: skip it when no cell topic wants it
+            with self.ctl.lock:  # contact queries touch the physics client
+                xs, forces = self.ctl.world.tactile()
+            t = self._types["Scatter"]()
+            t.header.stamp = stamp
+            t.header.frame_id = "finger_left_pad"
+            t.x, t.y = xs, forces
+            for pub in self.pub_tactile:
+                pub.publish(t)
         self.published += 1
 
-    def watched_cameras(self) -> set[str]:
-        """Cameras whose image topic has a subscriber right now."""
-        return {name for name, pub in self.pub_images.items() if pub.get_num_connections() > 0}
+    def watched_views(self) -> set[str]:
+        """Viewpoints shown by at least one stream whose image topic has a subscriber right now."""
+        return {s.view for s, pub in self.pub_images if pub.get_num_connections() > 0}
 
-    def publish_image(self, name: str, jpeg: bytes) -> None:
+    def publish_image(self, view: str, jpeg: bytes) -> None:
+        """One rendered viewpoint goes to every stream showing it (rospy skips topics without subscribers)."""
         msg = self._types["CompressedImage"]()
         msg.header.stamp = self.rospy.Time.now()
-        msg.header.frame_id = f"camera_{name}"
+        msg.header.frame_id = f"camera_{view}"
         msg.format = "jpeg"
         msg.data = jpeg
-        self.pub_images[name].publish(msg)
+        for s, pub in self.pub_images:
+            if s.view == view:
+                pub.publish(msg)
 
-    def _publish_alarms(self, alarms: list[Alarm]) -> None:
+    def _publish_faults(self, faults: list[Fault]) -> None:
         from cell_msgs.msg import Alarm as AlarmMsg
         out = self._types["AlarmList"]()
         out.header.stamp = self.rospy.Time.now()
-        for a in alarms:
+        for f in faults:
             m = AlarmMsg()
-            m.id, m.text, m.severity, m.active = a.id, a.text, a.severity, a.active
-            m.since = self.rospy.Time.from_sec(a.since)
+            m.id, m.text, m.severity, m.active = f.id, f.text, f.severity, f.active
+            m.since = self.rospy.Time.from_sec(f.since)
             out.alarms.append(m)
-        self.pub_alarms.publish(out)
+        self.pub_faults.publish(out)
 
     def _trigger_fault(self, req):
         from cell_msgs.srv import TriggerFaultResponse

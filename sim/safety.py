@@ -1,4 +1,8 @@
-"""Simulated cell faults and the alarm list they raise (what /sim/trigger_fault and /cell/alarms expose)."""
+"""Simulated device faults: what /sim/trigger_fault injects and the latched /sim/faults topic reports.
+
+These are the devices' own state (the controller's stops, the door switch, the gripper), not the cell's alarm
+list: turning faults into alarms is the alarms feature's job, which reads /sim/faults like any device state.
+"""
 from __future__ import annotations
 
 import threading
@@ -16,7 +20,7 @@ FAULTS = {
 
 
 @dataclass
-class Alarm:
+class Fault:
     id: str
     text: str
     severity: int
@@ -24,32 +28,32 @@ class Alarm:
     since: float = field(default_factory=time.time)  # wall time of the last change (ROS time when published)
 
 
-class AlarmBook:
-    """Current state of every known alarm; listeners hear about each change (the ROS bridge republishes)."""
+class FaultBook:
+    """Current state of every known fault; listeners hear about each change (the ROS bridge republishes)."""
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
-        self.alarms = {k: Alarm(k, text, sev) for k, (text, sev) in FAULTS.items()}
-        self._listeners: list[Callable[[list[Alarm]], None]] = []
+        self.faults = {k: Fault(k, text, sev) for k, (text, sev) in FAULTS.items()}
+        self._listeners: list[Callable[[list[Fault]], None]] = []
 
-    def subscribe(self, fn: Callable[[list[Alarm]], None]) -> None:
+    def subscribe(self, fn: Callable[[list[Fault]], None]) -> None:
         self._listeners.append(fn)
         fn(self.snapshot())
 
-    def set(self, alarm_id: str, active: bool) -> None:
+    def set(self, fault_id: str, active: bool) -> None:
         with self._lock:
-            alarm = self.alarms[alarm_id]
-            if alarm.active == active:
+            fault = self.faults[fault_id]
+            if fault.active == active:
                 return
-            alarm.active = active
-            alarm.since = time.time()
+            fault.active = active
+            fault.since = time.time()
         snap = self.snapshot()
         for fn in list(self._listeners):
             fn(snap)
 
-    def active(self, alarm_id: str) -> bool:
-        return self.alarms[alarm_id].active
+    def active(self, fault_id: str) -> bool:
+        return self.faults[fault_id].active
 
-    def snapshot(self) -> list[Alarm]:
+    def snapshot(self) -> list[Fault]:
         with self._lock:
-            return [Alarm(a.id, a.text, a.severity, a.active, a.since) for a in self.alarms.values()]
+            return [Fault(f.id, f.text, f.severity, f.active, f.since) for f in self.faults.values()]

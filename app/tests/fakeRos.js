@@ -1,9 +1,11 @@
-/** Test doubles for roslib's Ros and Topic, injected through RosConnection's factory. */
+/** Test doubles for roslib's Ros, Topic and Service, injected through RosConnection's factory. */
 export function makeFakeFactory() {
   /** @type {FakeRos[]} */
   const rosList = [];
   /** @type {FakeTopic[]} */
   const topics = [];
+  /** @type {FakeCall[]} */
+  const calls = [];
 
   class FakeRos {
     /** @type {Record<string, Function[]>} */
@@ -33,9 +35,16 @@ export function makeFakeFactory() {
     /** @type {Function[]} */
     callbacks = [];
     unsubscribed = false;
+    advertised = false;
+    unadvertised = false;
+    /** @type {any[]} */
+    published = [];
     /** @param {FakeRos} ros @param {string} name @param {string} type @param {any} options */
     constructor(ros, name, type, options) {
-      Object.assign(this, { ros, name, type, options });
+      /** @type {FakeRos} */ this.ros = ros;
+      /** @type {string} */ this.name = name;
+      /** @type {string} */ this.type = type;
+      /** @type {any} */ this.options = options;
     }
     /** @param {Function} cb */
     subscribe(cb) {
@@ -45,9 +54,34 @@ export function makeFakeFactory() {
       this.unsubscribed = true;
       this.callbacks = [];
     }
+    advertise() {
+      this.advertised = true;
+    }
+    unadvertise() {
+      this.unadvertised = true;
+      this.advertised = false;
+    }
+    /** @param {any} msg */
+    publish(msg) {
+      if (this.ros.closed) throw new Error('publish on a closed socket');
+      this.published.push(msg);
+    }
     /** @param {any} msg */
     deliver(msg) {
       for (const cb of this.callbacks) cb(msg);
+    }
+  }
+
+  /** One service call the test answers with ok(values) or fail(message). */
+  class FakeCall {
+    /** @param {FakeRos} ros @param {string} name @param {string} type @param {any} args @param {Function} okCb @param {Function} failCb */
+    constructor(ros, name, type, args, okCb, failCb) {
+      /** @type {FakeRos} */ this.ros = ros;
+      /** @type {string} */ this.name = name;
+      /** @type {string} */ this.type = type;
+      /** @type {any} */ this.args = args;
+      this.ok = /** @param {any} values */ (values) => okCb(values);
+      this.fail = /** @param {string} message */ (message) => failCb(message);
     }
   }
 
@@ -63,8 +97,19 @@ export function makeFakeFactory() {
       topics.push(t);
       return t;
     },
+    /** @param {any} ros @param {string} name @param {string} type */
+    createService(ros, name, type) {
+      return {
+        /** @param {any} args @param {Function} ok @param {Function} fail */
+        callService(args, ok, fail) {
+          calls.push(new FakeCall(ros, name, type, args, ok, fail));
+        },
+      };
+    },
   };
-  return { factory, rosList, topics };
+  /** @param {string} name the live topics with this name (newest last) */
+  const topicsNamed = (name) => topics.filter((t) => t.name === name);
+  return { factory, rosList, topics, calls, topicsNamed };
 }
 
 /** Manual timers so backoff delays can be asserted without waiting. */
@@ -97,3 +142,26 @@ export function makeFakeTimers() {
 
 /** Let queued promise callbacks run (factory calls are awaited). */
 export const flush = () => new Promise((r) => setTimeout(r, 0));
+
+/**
+ * A RosConnection wired to the fakes, plus a helper that opens the socket.
+ * @param {typeof import('../src/lib/core/connection.svelte.js').RosConnection} RosConnection
+ * @param {object} [opts]
+ */
+export function fakeConnection(RosConnection, opts = {}) {
+  const f = makeFakeFactory();
+  const timers = makeFakeTimers();
+  const conn = new RosConnection({
+    factory: f.factory,
+    url: () => 'ws://test/ros',
+    setTimer: timers.setTimer,
+    clearTimer: timers.clearTimer,
+    ...opts,
+  });
+  const connect = async () => {
+    conn.start();
+    await flush();
+    f.rosList.at(-1)?.emit('connection');
+  };
+  return { ...f, timers, conn, connect };
+}

@@ -1,24 +1,25 @@
-// Builds the BFF from its parts; server.js gives it sockets. Tests build it the same way.
+// Builds the BFF from the core and the feature list; server.js gives it sockets. Tests build it the same way.
 import fs from 'node:fs';
 import path from 'node:path';
 import express from 'express';
-import { loadCell } from './config/cell.js';
-import { UserStore, ensureInitialUsers } from './auth/users.js';
-import { TokenService, RevocationList, loadOrCreateKey } from './auth/tokens.js';
-import { sessionOf, setSessionCookie } from './auth/session.js';
-import { LoginThrottle } from './auth/throttle.js';
-import { AuditLog } from './audit/audit-log.js';
-import { ControlLease } from './control/lease.js';
-import { RosHealth } from './ros/health.js';
-import { RosRelay } from './ros/relay.js';
-import { createOpGuard } from './ros/op-guard.js';
-import { authRoutes } from './routes/auth.js';
-import { cellRoutes, requireSession, requirePage } from './routes/cell.js';
-import { DatabaseFiles, databaseRoutes, resolveUsbRoots } from './files/index.js';
-import { controlRoutes } from './routes/control.js';
-import { auditRoutes } from './routes/audit.js';
-import { openapi, validateRequests } from './http/openapi.js';
-import { staticApp, contentSecurityPolicy } from './http/static.js';
+import { loadCell } from './core/config/cell.js';
+import { UserStore, ensureInitialUsers } from './core/auth/users.js';
+import { TokenService, RevocationList, loadOrCreateKey } from './core/auth/tokens.js';
+import { sessionOf, setSessionCookie } from './core/auth/session.js';
+import { LoginThrottle } from './core/auth/throttle.js';
+import { authRoutes } from './core/auth/routes.js';
+import { AuditLog } from './core/audit/audit-log.js';
+import { ControlLease } from './core/control/lease.js';
+import { controlRoutes } from './core/control/routes.js';
+import { configFor } from './core/access/pages.js';
+import { grantsFor, motionNames } from './core/access/grants.js';
+import { RosHealth } from './core/ros/health.js';
+import { RosRelay } from './core/ros/relay.js';
+import { createOpGuard } from './core/ros/op-guard.js';
+import { requireSession, requirePage } from './core/http/guards.js';
+import { buildOpenApi, validateRequests } from './core/http/openapi.js';
+import { staticApp, contentSecurityPolicy } from './core/http/static.js';
+import { FEATURES } from './features/index.js';
 
 export const VERSION = '0.1.0';
 
@@ -26,13 +27,14 @@ export class StartupError extends Error {}
 
 /**
  * @param {import('./config/env.js').Env} env
- * @param {{log?: (m: string) => void, throttle?: LoginThrottle}} [opts]
+ * @param {{log?: (m: string) => void, throttle?: LoginThrottle, features?: import('./core/features/feature.js').Feature[]}} [opts]
+ *   features: the feature list (tests add fixture features)
  */
-export async function createBff(env, { log = (m) => console.log(m), throttle = new LoginThrottle() } = {}) {
-  const cell = loadCell(env.cellConfig);
+export async function createBff(env, { log = (m) => console.log(m), throttle = new LoginThrottle(), features = FEATURES } = {}) {
+  const cell = loadCell(env.cellConfig, features);
   fs.mkdirSync(env.dataDir, { recursive: true, mode: 0o700 });
   const users = new UserStore(env.usersFile);
-  const initial = await ensureInitialUsers(users, env.dataDir);
+  const initial = await ensureInitialUsers(users, env.dataDir, Object.keys(cell.roles));
   // Like the paper's immutable users file: only an administrator on the robot PC changes users (the CLI).
   const mode = fs.statSync(env.usersFile).mode;
   if (mode & 0o022) throw new StartupError(`${env.usersFile} is group- or world-writable (mode ${(mode & 0o777).toString(8)}); run: chmod 600 ${env.usersFile}`);
@@ -48,17 +50,18 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
       target: h?.username, outcome: 'ok',
     }),
   });
-  const database = new DatabaseFiles({ cell, dataDir: env.dataDir, usbRoots: resolveUsbRoots(env.usbRoots, cell), audit });
   const rosHealth = new RosHealth({ masterUri: env.rosMasterUri, rosbridgePort: env.rosbridgePort });
   const started = Date.now();
   const healthReport = async () => ({ status: 'ok', version: VERSION, uptime_s: (Date.now() - started) / 1000, ros: await rosHealth.get() });
   const authenticate = (req) => sessionOf(req, tokens, users);
+  const grants = new Map(Object.keys(cell.roles).map((role) => [role, grantsFor(cell, features, role)]));
+  const openapi = buildOpenApi(features);
 
   const relay = new RosRelay({
     upstreamUrl: `ws://127.0.0.1:${env.rosbridgePort}`,
     authenticate,
     checkOrigin: sameOrigin,
-    guard: createOpGuard({ cell, lease, audit }),
+    guard: createOpGuard({ grantsOf: (role) => grants.get(role), motion: motionNames(cell, features), lease, audit }),
     isValid: (s) => tokens.sessionAlive(s.claims) && users.get(s.username)?.role === s.role,
     // A lease holder that disconnects gives control back.
     onClose: (s, stillOpen) => { if (stillOpen === 0) lease.release(s, 'released-on-disconnect'); },
@@ -87,7 +90,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     res.setHeader('Cache-Control', 'no-store');
     next();
   });
-  app.use(validateRequests());
+  app.use(validateRequests(openapi));
   app.get('/api/health', async (req, res) => res.json(await healthReport()));
   app.get('/api/openapi.json', (req, res) => res.json(openapi));
   app.use(authRoutes({
@@ -97,10 +100,15 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
       relay.closeWhere((x) => x.sid === s.sid, 'logged out');
     },
   }));
-  app.use(cellRoutes({ cell, cellFile: env.cellConfig, users, healthReport }));
-  app.use(controlRoutes({ lease }));
-  app.use(auditRoutes({ audit, cell }));
-  app.use(databaseRoutes({ service: database, requireSession, requirePage, log }));
+  app.get('/api/config', requireSession, (req, res) => res.json(configFor(cell, features, req.session.role)));
+  app.use(controlRoutes({ lease, cell }));
+  for (const f of features) {
+    if (!f.routes) continue;
+    app.use(f.routes({
+      cell, section: cell[f.id], cellFile: env.cellConfig, env, users, audit, healthReport, log,
+      guard: [requireSession, requirePage(cell, f.id)],
+    }));
+  }
   app.use('/api', (req, res) => res.status(404).json({ error: `no such API: ${req.method} ${req.originalUrl}` }));
   app.use(...staticApp(env.appDir));
   // Malformed JSON and other client errors: a clear message, never a stack trace.
@@ -111,7 +119,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     res.status(status).json({ error: status >= 500 ? 'internal error' : err.type === 'entity.parse.failed' ? 'malformed JSON body' : err.message });
   });
 
-  return { app, relay, cell, users, tokens, audit, lease, database, initial, close: () => relay.close() };
+  return { app, relay, cell, features, grants, openapi, users, tokens, audit, lease, initial, close: () => relay.close() };
 }
 
 /** Origin (when the browser sends one) must name the host the request was sent to. @param {import('node:http').IncomingMessage} req */

@@ -4,10 +4,10 @@
 import http from 'node:http';
 import https from 'node:https';
 import express from 'express';
-import { readEnv } from './config/env.js';
+import { readEnv } from './core/config/env.js';
 import { createBff, StartupError } from './app.js';
-import { CellConfigError } from './config/cell.js';
-import { ensureCertificates, tlsRoutes, httpsRedirect, httpsUrlFor, isLoopback } from './tls/index.js';
+import { CellConfigError } from './core/config/cell.js';
+import { ensureCertificates, tlsRoutes, httpsRedirect, httpsUrlFor, isLoopback } from './core/tls/index.js';
 
 const env = readEnv();
 const log = (m) => console.log(`[bff] ${m}`);

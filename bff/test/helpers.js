@@ -3,15 +3,15 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import http from 'node:http';
-import { readEnv } from '../src/config/env.js';
+import { readEnv } from '../src/core/config/env.js';
 import { createBff } from '../src/app.js';
 
 export function tempDir(prefix = 'bff-test-') {
   return fs.mkdtempSync(path.join(os.tmpdir(), prefix));
 }
 
-/** @param {Partial<Record<string,string>>} [extraEnv] */
-export async function startBff(extraEnv = {}) {
+/** @param {Partial<Record<string,string>>} [extraEnv] @param {Parameters<typeof createBff>[1]} [opts] */
+export async function startBff(extraEnv = {}, opts = {}) {
   const dataDir = tempDir();
   const appDir = path.join(dataDir, 'app');
   fs.mkdirSync(path.join(appDir, '_app/immutable'), { recursive: true });
@@ -19,7 +19,7 @@ export async function startBff(extraEnv = {}) {
   fs.writeFileSync(path.join(appDir, '_app/immutable/entry.abc123.js'), 'export {}');
   fs.writeFileSync(path.join(appDir, 'sw.js'), '// sw');
   const env = readEnv({ DATA_DIR: dataDir, APP_DIR: appDir, ROSBRIDGE_PORT: '1', ROS_MASTER_URI: 'http://127.0.0.1:1', ...extraEnv });
-  const bff = await createBff(env, { log: () => {} });
+  const bff = await createBff(env, { log: () => {}, ...opts });
   const server = http.createServer(bff.app);
   server.on('upgrade', (req, socket, head) => bff.relay.handleUpgrade(req, socket, head));
   await new Promise((r) => server.listen(0, '127.0.0.1', r));

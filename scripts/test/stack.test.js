@@ -1,7 +1,10 @@
 // `npm start`'s supervisor: a whole stack comes up on isolated ports, SIGINT/SIGTERM stop every process it
-// started within 5 s with no orphans, and a second start right after works.
+// started within 5 s with no orphans, and a second start right after works. Even a SIGKILLed supervisor
+// (up, or still starting its children) leaves nothing behind: its watchdog stops the stack within 5 s.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
+import { spawn } from 'node:child_process';
+import fs from 'node:fs';
 import net from 'node:net';
 import https from 'node:https';
 import { stackEnv, addUser, startStack, stopStack, pidsOfStack, REPO_ROOT } from '../../e2e/lib/stack.js';
@@ -9,6 +12,64 @@ import { stackEnv, addUser, startStack, stopStack, pidsOfStack, REPO_ROOT } from
 const portFree = (port) => new Promise((resolve) => {
   const s = net.createServer().once('error', () => resolve(false)).listen(port, '127.0.0.1', () => s.close(() => resolve(true)));
 });
+
+/** Poll `pred` every 50 ms until it holds or `ms` have passed; true if it held. */
+async function until(pred, ms) {
+  const end = Date.now() + ms;
+  for (;;) {
+    if (await pred()) return true;
+    if (Date.now() >= end) return false;
+    await new Promise((r) => setTimeout(r, 50));
+  }
+}
+
+const environOf = (pid) => { try { return fs.readFileSync(`/proc/${pid}/environ`, 'utf8').split('\0'); } catch { return []; } };
+const describe = (pids) => pids.map((p) => { try { return `${p}: ${fs.readFileSync(`/proc/${p}/cmdline`, 'utf8').replace(/\0/g, ' ').trim()}`; } catch { return `${p}: (gone)`; } });
+
+/** Live (non-zombie) pids whose environment holds exactly `entry` (e.g. `CELL_STACK_ID=...`). */
+function pidsWithEnv(entry) {
+  const pids = [];
+  for (const d of fs.readdirSync('/proc')) {
+    if (!/^\d+$/.test(d) || Number(d) === process.pid) continue;
+    try {
+      if (environOf(d).includes(entry) && !/\) Z /.test(fs.readFileSync(`/proc/${d}/stat`, 'utf8'))) pids.push(Number(d));
+    } catch { /* gone */ }
+  }
+  return pids;
+}
+
+/** The stack's marker (`CELL_STACK_ID=...`), read from one of its running children. */
+function markerOf(dataDir) {
+  for (const pid of pidsOfStack(dataDir)) {
+    const entry = environOf(pid).find((e) => e.startsWith('CELL_STACK_ID='));
+    if (entry) return entry;
+  }
+  return null;
+}
+
+/** SIGKILL the supervisor alone (not its group) and wait up to 5 s for everything of its stack to be gone. */
+async function killSupervisorAndAwaitCleanup(proc, env, marker, ports) {
+  const stackPids = () => [...new Set([...pidsWithEnv(marker), ...pidsOfStack(env.DATA_DIR)])];
+  const before = stackPids();
+  const exited = new Promise((r) => proc.once('exit', r));
+  const t0 = Date.now();
+  process.kill(proc.pid, 'SIGKILL');
+  await exited;
+  const clean = async () => stackPids().length === 0 && (await Promise.all(ports.map(portFree))).every(Boolean);
+  const ok = await until(clean, 5000 - (Date.now() - t0));
+  const took = (Date.now() - t0) / 1000;
+  assert.deepEqual(describe(stackPids()), [], `no process of the stack is left ${took} s after the SIGKILL (had ${before.length})`);
+  for (const p of ports) assert.ok(await portFree(p), `port ${p} is free again ${took} s after the SIGKILL`);
+  assert.ok(ok, `cleaned up in ${took} s`);
+  return took;
+}
+
+/** Whatever a failed run left behind must not outlive the test. */
+function killLeftovers(env, marker) {
+  for (const pid of [...pidsOfStack(env.DATA_DIR), ...(marker ? pidsWithEnv(marker) : [])]) {
+    try { process.kill(pid, 'SIGKILL'); } catch { /* gone */ }
+  }
+}
 
 for (const signal of ['SIGINT', 'SIGTERM']) {
   test(`start, serve, stop on ${signal} within 5 s with nothing left behind, start again`, { timeout: 240_000 }, async (t) => {
@@ -74,4 +135,55 @@ test('npm start runs the simulated cell by default, at UR_HOST, and stops it wit
   await stopStack(stack.proc);
   assert.ok((Date.now() - t0) / 1000 < 5);
   assert.deepEqual(pidsOfStack(env.DATA_DIR), []);
+});
+
+test('SIGKILL of the supervisor alone, once up: master, nodes, BFF and ports are gone within 5 s; a stack beside it lives on', { timeout: 240_000 }, async (t) => {
+  const base = 28480;
+  const ports = [base, base + 1, base + 2, base + 3];
+  const env = stackEnv({ port: base, masterPort: base + 1, rosbridgePort: base + 2, extraEnv: { UR_SIM: '0' } });
+  const otherEnv = stackEnv({ port: 28680, masterPort: 28681, rosbridgePort: 28682, extraEnv: { UR_SIM: '0' } });
+  let marker = null;
+  t.after(() => killLeftovers(env, marker));
+  t.after(() => killLeftovers(otherEnv, null));
+  const [stack, other] = await Promise.all([startStack(env), startStack(otherEnv)]);
+  t.after(() => stopStack(stack.proc));
+  t.after(() => stopStack(other.proc));
+  const health = await (await fetch(`http://127.0.0.1:${base}/api/health`)).json();
+  assert.deepEqual(health.ros, { master: true, rosbridge: true });
+  for (const p of ports) assert.equal(await portFree(p), false, `port ${p} is listening`);
+  marker = markerOf(env.DATA_DIR);
+  assert.match(marker ?? '', /^CELL_STACK_ID=\S+$/);
+  assert.ok(pidsWithEnv(marker).length >= 5, 'roscore, rosmaster, rosout, roslaunch, nodes, BFF carry the marker');
+  const otherPids = pidsOfStack(otherEnv.DATA_DIR);
+
+  const took = await killSupervisorAndAwaitCleanup(stack.proc, env, marker, ports);
+  t.diagnostic(`cleaned up in ${took} s; ${stack.output().match(/^\[watchdog\].*/gm)?.join(' / ')}`);
+
+  // The other stack lost nothing and still serves; it stops cleanly as ever.
+  assert.deepEqual(describe(otherPids.filter((p) => !pidsOfStack(otherEnv.DATA_DIR).includes(p))), [], 'the other stack lost no process');
+  const otherHealth = await (await fetch('http://127.0.0.1:28680/api/health')).json();
+  assert.deepEqual(otherHealth.ros, { master: true, rosbridge: true });
+  assert.ok((await stopStack(other.proc)) < 5);
+  assert.deepEqual(pidsOfStack(otherEnv.DATA_DIR), []);
+});
+
+test('SIGKILL of the supervisor while it is still starting its children leaves nothing behind', { timeout: 180_000 }, async (t) => {
+  const base = 28580;
+  const ports = [base, base + 1, base + 2, base + 3];
+  const env = stackEnv({ port: base, masterPort: base + 1, rosbridgePort: base + 2, extraEnv: { UR_SIM: '0' } });
+  let marker = null;
+  t.after(() => killLeftovers(env, marker));
+  const proc = spawn(process.execPath, ['scripts/stack.js'], { cwd: REPO_ROOT, env, stdio: ['ignore', 'pipe', 'pipe'] });
+  t.after(() => stopStack(proc));
+  let output = '';
+  proc.stdout.on('data', (d) => { output += d; });
+  proc.stderr.on('data', (d) => { output += d; });
+  // roscore is up and roslaunch has just begun bringing up its nodes; the BFF has just been spawned.
+  const starting = await until(() => /^\[ros\] /m.test(output) || proc.exitCode !== null, 60_000);
+  assert.ok(starting && proc.exitCode === null, `roslaunch starts:\n${output.slice(-2000)}`);
+  assert.doesNotMatch(output, /\[stack\] ready:/);
+  marker = markerOf(env.DATA_DIR);
+  assert.match(marker ?? '', /^CELL_STACK_ID=\S+$/);
+  const took = await killSupervisorAndAwaitCleanup(proc, env, marker, ports);
+  t.diagnostic(`cleaned up in ${took} s; ${output.match(/^\[watchdog\].*/gm)?.join(' / ')}`);
 });

@@ -68,6 +68,7 @@ def start_sim() -> Iterator[Callable[..., SimProcess]]:
     def start(host: str, *args: str, env: Optional[dict[str, str]] = None) -> SimProcess:
         e = dict(os.environ)
         e["ROS_MASTER_URI"] = "http://127.0.0.1:1"  # no master unless a test passes one
+        e.pop("CELL_CONFIG", None)  # the demo cell unless a test passes --cell or CELL_CONFIG: not the caller's
         e.update(env or {})
         sim = SimProcess(host, list(args), e)
         procs.append(sim)
@@ -88,6 +89,7 @@ def module_sim(request) -> Iterator[SimProcess]:
     args = getattr(request.module, "SIM_ARGS", [])
     env = dict(os.environ)
     env["ROS_MASTER_URI"] = "http://127.0.0.1:1"
+    env.pop("CELL_CONFIG", None)
     sim = SimProcess(host, list(args), env)
     sim.wait_ready()
     yield sim

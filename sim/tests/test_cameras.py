@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import threading
 
+import pytest
+
 from conftest import wait_for
 from sim.cameras import CameraRig
 from sim.world import World
@@ -47,3 +49,8 @@ def wait_for_quiet(predicate, seconds: float) -> bool:
         return True
     except AssertionError:
         return False
+
+
+def test_rig_refuses_a_view_the_sim_does_not_have() -> None:
+    with pytest.raises(ValueError, match="ceiling"):
+        CameraRig(None, (96, 72), rate=20.0, views=["workbench", "ceiling"])  # before any process starts

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +20,10 @@ from sim.world import CUBE_SIZE, World
 
 HOST = "127.0.0.13"
 SEED = 7
+# A test cell, not config/demo-cell.yaml: the sensor topics are whatever the cell file names.
+CELL = Path(__file__).resolve().parent / "cells" / "renamed-topics.yaml"
+TACTILE_TOPIC = "/robot2/finger/tactile"
+WRENCH_TOPIC = "/robot2/ft_sensor/wrench"
 
 
 class Latest:
@@ -56,7 +61,7 @@ def grasp_pose(cube_pos, cube_orn, home_rotvec, z: float) -> np.ndarray:
 
 @pytest.fixture
 def cell(roscore, start_sim):
-    start_sim(HOST, "--speed", "2", "--no-cameras", "--seed", str(SEED), "--sensor-rate", "50",
+    start_sim(HOST, "--cell", str(CELL), "--speed", "2", "--no-cameras", "--seed", str(SEED), "--sensor-rate", "50",
               env={"ROS_MASTER_URI": roscore})
     if not rospy.core.is_initialized():
         rospy.init_node("sim_test", anonymous=True, disable_signals=True)
@@ -71,8 +76,8 @@ def cell(roscore, start_sim):
 
 def test_gripper_closes_on_cube_and_sensors_respond(cell):
     c, r, io = cell
-    tactile = Latest("/cell/tactile", Scatter)
-    wrench = Latest("/cell/wrench", WrenchStamped)
+    tactile = Latest(TACTILE_TOPIC, Scatter)
+    wrench = Latest(WRENCH_TOPIC, WrenchStamped)
     replica = World(seed=SEED)  # same seed -> same part placement as in the sim process
     cube_pos, cube_orn = replica.body_poses()[0]
     replica.close()

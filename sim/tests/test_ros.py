@@ -1,12 +1,20 @@
-"""ROS side: camera streams at the configured rate, sensor topics, latched alarms, the fault service."""
+"""ROS side: the cell file's device topics (camera streams at the configured rate, sensors), the latched
+device faults and the fault service; nothing on topics the cell file does not name.
+
+The sims here run a test cell with other topic names than the demo cell (cells/renamed-topics.yaml), so a
+topic hard-coded in the sim would show up as missing data or as an unexpected publication.
+"""
 from __future__ import annotations
 
 import io
 import threading
 import time
 
+from pathlib import Path
+
 import dashboard_client
 import pytest
+import rosgraph
 import rospy
 import rtde_receive
 from cell_msgs.msg import AlarmList, Scatter
@@ -18,7 +26,16 @@ from sensor_msgs.msg import CompressedImage, JointState
 from conftest import wait_for
 
 HOST = "127.0.0.14"
-CAMERAS = ("workbench", "global")
+CELLS = Path(__file__).resolve().parent / "cells"
+RENAMED = CELLS / "renamed-topics.yaml"
+# Stream topic -> the viewpoint the sim must show there (explicit `view`, then cycling by position).
+STREAMS = {"/robot2/overview/compressed": "global", "/robot2/overview2/compressed": "global",
+           "/robot2/bench/compressed": "workbench"}
+WRENCH_TOPICS = ("/robot2/ft_sensor/wrench", "/robot2/ft_sensor/wrench_copy")
+TACTILE_TOPIC = "/robot2/finger/tactile"
+# What the sim published before the cell file named its topics; the demo cell still uses these names.
+OLD_TOPICS = ("/cell/wrench", "/cell/tactile", "/cell/alarms", "/cell/camera/workbench/image/compressed",
+              "/cell/camera/global/image/compressed")
 
 
 class Recorder:
@@ -39,55 +56,91 @@ class Recorder:
         return (len(t) - 1) / (t[-1] - t[0]) if len(t) > 2 else 0.0
 
 
-@pytest.fixture
-def ros_cell(roscore, start_sim):
-    # Small frames: this checks the streaming contract (rate, JPEG, two views); bench/sim_bench.py measures
-    # 640x480 rendering cost.
-    sim = start_sim(HOST, "--camera-size", "160x120", "--camera-rate", "6", "--sensor-rate", "40",
-                    "--speed", "1", env={"ROS_MASTER_URI": roscore})
+def start_ros_sim(start_sim, roscore: str, cell: Path, *args: str):
+    # Small frames: this checks the streaming contract (rate, JPEG, views); bench/sim_bench.py measures
+    # 640x480 rendering cost. --cell, not CELL_CONFIG: the caller's environment must not choose the cell.
+    sim = start_sim(HOST, "--cell", str(cell), "--camera-size", "160x120", "--camera-rate", "6",
+                    "--sensor-rate", "40", "--speed", "1", *args, env={"ROS_MASTER_URI": roscore})
     if not rospy.core.is_initialized():
         rospy.init_node("sim_test", anonymous=True, disable_signals=True)
     return sim
 
 
-def test_cameras_publish_jpeg_at_configured_rate(ros_cell):
-    recs = {name: Recorder(f"/cell/camera/{name}/image/compressed", CompressedImage) for name in CAMERAS}
-    wait_for(lambda: all(len(r.msgs) >= 15 for r in recs.values()), 20, what="15 frames per camera")
-    for name, rec in recs.items():
+@pytest.fixture
+def ros_cell(roscore, start_sim):
+    return start_ros_sim(start_sim, roscore, RENAMED)
+
+
+def test_cameras_publish_jpeg_at_configured_rate_on_the_cell_files_streams(ros_cell):
+    recs = {topic: Recorder(topic, CompressedImage) for topic in STREAMS}
+    wait_for(lambda: all(len(r.msgs) >= 15 for r in recs.values()), 20, what="15 frames per stream")
+    for topic, rec in recs.items():
         # The renderer runs at nice 10 so physics wins under CPU load: it may lag (seen at 4.2 Hz on a busy
         # 2-core CI run) but never runs faster than configured.
-        assert 3.6 <= rec.rate() <= 7.2, f"{name}: {rec.rate():.1f} Hz, configured 6 Hz"
+        assert 3.6 <= rec.rate() <= 7.2, f"{topic}: {rec.rate():.1f} Hz, configured 6 Hz"
         msg = rec.msgs[-1]
         assert msg.format == "jpeg"
+        assert msg.header.frame_id == f"camera_{STREAMS[topic]}"
         assert bytes(msg.data[:2]) == b"\xff\xd8"
         img = Image.open(io.BytesIO(bytes(msg.data)))
         img.load()
         assert img.format == "JPEG" and img.size == (160, 120)
-        assert len(set(img.convert("L").getdata())) > 20, f"{name}: blank image"
-    wb, gl = (bytes(recs[n].msgs[-1].data) for n in CAMERAS)
-    assert wb != gl, "the two cameras must show different views"
+        assert len(set(img.convert("L").getdata())) > 20, f"{topic}: blank image"
+    wb = bytes(recs["/robot2/bench/compressed"].msgs[-1].data)
+    gl = bytes(recs["/robot2/overview/compressed"].msgs[-1].data)
+    assert wb != gl, "the two viewpoints must show different views"
     for rec in recs.values():
         rec.sub.unregister()
 
 
-def test_sensor_topics_alarms_and_faults(ros_cell):
+def _sim_publications() -> dict[str, str]:
+    """Topic -> type of everything the sim's node publishes, as the master knows it."""
+    master = rosgraph.Master("/sim_test")
+    pubs, _, _ = master.getSystemState()
+    types = dict(master.getTopicTypes())
+    return {topic: types.get(topic, "?") for topic, nodes in pubs if "/sim_cell" in nodes}
+
+
+@pytest.mark.parametrize("cell, expected", [
+    (RENAMED, {**{t: "geometry_msgs/WrenchStamped" for t in WRENCH_TOPICS},
+               TACTILE_TOPIC: "cell_msgs/Scatter",
+               **{t: "sensor_msgs/CompressedImage" for t in STREAMS}}),
+    (CELLS / "no-devices.yaml", {}),
+], ids=["renamed-topics", "no-devices"])
+def test_sim_publishes_exactly_the_cell_files_topics(roscore, start_sim, cell: Path, expected: dict[str, str]):
+    sim = start_ros_sim(start_sim, roscore, cell)
+    expected = {**expected, "/joint_states": "sensor_msgs/JointState", "/sim/faults": "cell_msgs/AlarmList",
+                "/rosout": "rosgraph_msgs/Log"}
+    # A previous test's sim unregisters as it stops; give the master a moment rather than race it.
+    wait_for(lambda: _sim_publications() == expected, 10,
+             what=f"the sim's publications to be exactly {sorted(expected)}")
+    assert not set(OLD_TOPICS) & set(_sim_publications())
+    if not any(t.endswith("/compressed") for t in expected):
+        assert "renderer" not in sim.output()  # no stream in the cell file: no render process either
+        assert "0 camera stream(s)" in sim.output()
+
+
+def test_sensor_topics_faults_and_fault_service(ros_cell):
     joints = Recorder("/joint_states", JointState)
-    wrench = Recorder("/cell/wrench", WrenchStamped)
-    tactile = Recorder("/cell/tactile", Scatter)
-    alarms = Recorder("/cell/alarms", AlarmList)
-    wait_for(lambda: len(joints.msgs) > 40 and len(wrench.msgs) > 40 and len(tactile.msgs) > 40, 10,
-             what="sensor messages")
-    for rec in (joints, wrench, tactile):
+    wrenches = [Recorder(t, WrenchStamped) for t in WRENCH_TOPICS]
+    tactile = Recorder(TACTILE_TOPIC, Scatter)
+    faults = Recorder("/sim/faults", AlarmList)
+    wait_for(lambda: all(len(r.msgs) > 40 for r in (joints, tactile, *wrenches)), 10, what="sensor messages")
+    for rec in (joints, tactile, *wrenches):
         assert 34 <= rec.rate() <= 46, f"{rec.sub.name}: {rec.rate():.1f} Hz, configured 40 Hz"
     js = joints.msgs[-1]
     assert list(js.name[:6]) == ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
                                  "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
     assert abs(js.position[1] + 1.5708) < 0.01
-    assert wrench.msgs[-1].wrench.force.z < -5  # the gripper hangs from the sensor
+    for rec in wrenches:
+        assert rec.msgs[-1].wrench.force.z < -5  # the gripper hangs from the sensor
+        assert rec.msgs[-1].header.frame_id == "ft_sensor"
+    assert len(tactile.msgs[-1].x) == 8 and tactile.msgs[-1].header.frame_id == "finger_left_pad"
 
-    wait_for(lambda: alarms.msgs, 5, what="latched alarm list")
-    assert {a.id for a in alarms.msgs[-1].alarms} == {"protective_stop", "gripper_fault", "door_open", "force_limit"}
-    assert not any(a.active for a in alarms.msgs[-1].alarms)
+    # The devices' fault state (latched): what a cell alarms node reads; the sim publishes no alarm list.
+    wait_for(lambda: faults.msgs, 5, what="latched fault list on /sim/faults")
+    assert {a.id for a in faults.msgs[-1].alarms} == {"protective_stop", "gripper_fault", "door_open", "force_limit"}
+    assert not any(a.active for a in faults.msgs[-1].alarms)
 
     rospy.wait_for_service("/sim/trigger_fault", 5)
     trigger = rospy.ServiceProxy("/sim/trigger_fault", TriggerFault)
@@ -96,20 +149,20 @@ def test_sensor_topics_alarms_and_faults(ros_cell):
     db.connect()
     try:
         assert trigger("protective_stop").success
-        wait_for(lambda: _active(alarms) == {"protective_stop"}, 3, what="protective_stop alarm")
+        wait_for(lambda: _active(faults) == {"protective_stop"}, 3, what="protective_stop fault")
         wait_for(lambda: r.getSafetyMode() == 3, 2, what="RTDE safety mode PROTECTIVE_STOP")
         assert r.isProtectiveStopped()
         assert db.safetystatus() == "Safetystatus: PROTECTIVE_STOP"
 
         assert trigger("door_open").success
         assert trigger("gripper_fault").success
-        wait_for(lambda: _active(alarms) == {"protective_stop", "door_open", "gripper_fault"}, 3, what="alarms")
+        wait_for(lambda: _active(faults) == {"protective_stop", "door_open", "gripper_fault"}, 3, what="faults")
 
         reply = trigger("earthquake")
         assert not reply.success and "unknown fault" in reply.message
 
         assert trigger("reset").success
-        wait_for(lambda: _active(alarms) == set(), 3, what="all alarms cleared")
+        wait_for(lambda: _active(faults) == set(), 3, what="all faults cleared")
         wait_for(lambda: r.getSafetyMode() == 1, 2, what="safety mode NORMAL")
         assert db.safetystatus() == "Safetystatus: NORMAL"
 
@@ -117,10 +170,10 @@ def test_sensor_topics_alarms_and_faults(ros_cell):
         wait_for(lambda: r.getSafetyMode() == 5, 2, what="SAFEGUARD_STOP while the door is open")
         assert db.safetystatus() == "Safetystatus: SAFEGUARD_STOP"
         assert trigger("force_limit").success
-        wait_for(lambda: {"force_limit", "protective_stop"} <= _active(alarms), 3, what="force limit alarm")
+        wait_for(lambda: {"force_limit", "protective_stop"} <= _active(faults), 3, what="force limit fault")
         assert trigger("reset").success
-        wait_for(lambda: r.getSafetyMode() == 1 and not _active(alarms), 3, what="reset")
-        inactive = [a for a in alarms.msgs[-1].alarms if a.id == "force_limit"][0]
+        wait_for(lambda: r.getSafetyMode() == 1 and not _active(faults), 3, what="reset")
+        inactive = [a for a in faults.msgs[-1].alarms if a.id == "force_limit"][0]
         assert not inactive.active and inactive.since.to_sec() > 0
     finally:
         db.disconnect()

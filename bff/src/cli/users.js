@@ -1,8 +1,9 @@
 #!/usr/bin/env node
 // npm run users -- add <name> --role <role> --password-stdin | passwd <name> --password-stdin | remove <name> | list
-import { readEnv } from '../config/env.js';
-import { UserStore, UsersError } from '../auth/users.js';
-import { loadCell, CellConfigError } from '../config/cell.js';
+import { readEnv } from '../core/config/env.js';
+import { UserStore, UsersError } from '../core/auth/users.js';
+import { loadCell, CellConfigError } from '../core/config/cell.js';
+import { FEATURES } from '../features/index.js';
 
 const USAGE = `usage: npm run users -- add <name> --role <role> --password-stdin
        npm run users -- passwd <name> --password-stdin
@@ -30,7 +31,7 @@ async function main(argv) {
     case 'add': {
       const role = opt('--role');
       if (!name || !role || !flag('--password-stdin')) throw new UsersError(USAGE);
-      const roles = Object.keys(loadCell(env.cellConfig).roles);
+      const roles = Object.keys(loadCell(env.cellConfig, FEATURES).roles);
       if (!roles.includes(role)) throw new UsersError(`unknown role "${role}" (the cell file defines: ${roles.join(', ')})`);
       await store.add(name, role, await readStdin());
       console.log(`added ${name} (${role}) to ${env.usersFile}`);

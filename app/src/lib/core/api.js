@@ -1,0 +1,75 @@
+/**
+ * Thin JSON client for the BFF (same origin, cookie session).
+ * It never throws: every call resolves to an ApiResult so callers can tell
+ * "logged out" (401) from "offline" (network error) without try/catch chains.
+ */
+
+/**
+ * @typedef {{ kind: 'ok', status: number, data: any }
+ *   | { kind: 'unauthorized', status: 401, error: string, data?: any }
+ *   | { kind: 'forbidden', status: 403, error: string, data?: any }
+ *   | { kind: 'offline', error: string }
+ *   | { kind: 'error', status: number, error: string, data?: any }} ApiResult
+ * `data` on a refusal is the server's JSON body (e.g. a 409 from the control lease names the holder).
+ */
+
+/**
+ * @param {string} method
+ * @param {string} path  e.g. '/api/config'
+ * @param {any} [body]   serialised as JSON when given
+ * @param {typeof fetch} [fetchImpl]
+ * @returns {Promise<ApiResult>}
+ */
+export async function request(method, path, body, fetchImpl = globalThis.fetch) {
+  /** @type {RequestInit} */
+  const init = {
+    method,
+    credentials: 'same-origin',
+    headers: { Accept: 'application/json' },
+    cache: 'no-store',
+  };
+  if (body !== undefined) {
+    init.headers = { ...init.headers, 'Content-Type': 'application/json' };
+    init.body = JSON.stringify(body);
+  }
+  let res;
+  try {
+    res = await fetchImpl(path, init);
+  } catch (e) {
+    // fetch only rejects on network failure (offline, server down, CORS): not an auth answer.
+    return { kind: 'offline', error: e instanceof Error ? e.message : String(e) };
+  }
+  const data = await readJson(res);
+  if (res.ok) return { kind: 'ok', status: res.status, data };
+  const error = (data && typeof data.error === 'string' && data.error) || res.statusText || `HTTP ${res.status}`;
+  if (res.status === 401) return { kind: 'unauthorized', status: 401, error, data };
+  if (res.status === 403) return { kind: 'forbidden', status: 403, error, data };
+  return { kind: 'error', status: res.status, error, data };
+}
+
+/** @param {Response} res */
+async function readJson(res) {
+  if (res.status === 204) return null;
+  try {
+    const text = await res.text();
+    return text ? JSON.parse(text) : null;
+  } catch {
+    return null;
+  }
+}
+
+export const api = {
+  /** @param {string} username @param {string} password */
+  login: (username, password) => request('POST', '/api/auth/login', { username, password }),
+  logout: () => request('POST', '/api/auth/logout'),
+  me: () => request('GET', '/api/auth/me'),
+  config: () => request('GET', '/api/config'),
+  health: () => request('GET', '/api/health'),
+  system: () => request('GET', '/api/system'),
+  // The control lease (one controlling session at a time; see core/lease.svelte.js).
+  control: () => request('GET', '/api/control'),
+  /** @param {{ force?: boolean }} [o] */
+  controlTake: (o = {}) => request('POST', '/api/control/take', o.force ? { force: true } : undefined),
+  controlHeartbeat: () => request('POST', '/api/control/heartbeat'),
+  controlRelease: () => request('POST', '/api/control/release'),
+};

@@ -1,0 +1,251 @@
+/**
+ * The control lease, as this session sees it: one session at a time may command motion.
+ *
+ * HTTP (BFF): GET /api/control -> {holder: {username, role, since} | null, you}; POST take [{force}]
+ * -> view or 409 {error, holder}; POST heartbeat -> view or 409 {error, holder}; POST release -> 204.
+ * The server drops a lease after 2 s without a heartbeat, so while we hold it we heartbeat every
+ * 500 ms; otherwise, while someone shows the lease (watch()), we poll every 1.5 s.
+ * Losing the lease (taken over, expired, server unreachable) leaves a notice in `lost` until dismissed
+ * or control is taken again.
+ */
+import { api as defaultApi } from './api.js';
+import { session } from './session.svelte.js';
+
+/** @typedef {{ username: string, role: string, since?: string }} LeaseHolder */
+/** @typedef {{ reason: string, at: number }} LostNotice */
+
+/** @param {LeaseHolder | null | undefined} h */
+export const holderLabel = (h) => (h ? `${h.username} (${h.role})` : 'nobody');
+
+export class ControlLease {
+  /** Who holds control (null: nobody, as far as we know). @type {LeaseHolder | null} */
+  holder = $state(null);
+  // Whether this session holds it: a plain field for the logic, mirrored into state for the UI.
+  // (Logic must not read the state: inside an effect's teardown Svelte hands out the old value.)
+  #you = false;
+  #youShown = $state(false);
+  /** Whether this session holds control. */
+  get you() {
+    return this.#youShown;
+  }
+  set you(v) {
+    this.#you = v;
+    this.#youShown = v;
+  }
+  /** Whether the last request reached the server (false: unknown, e.g. offline). */
+  reachable = $state(false);
+  /** Why we lost control, until dismissed. @type {LostNotice | null} */
+  lost = $state(null);
+
+  #watchers = 0;
+  /** @type {any} */
+  #timer = null;
+  #inflight = false;
+  #lastOk = 0;
+  // Bumped by take/release/reset so an answer to an older request does not undo a newer one.
+  #epoch = 0;
+
+  /**
+   * @param {object} [o]
+   * @param {Pick<typeof defaultApi, 'control' | 'controlTake' | 'controlHeartbeat' | 'controlRelease'>} [o.api]
+   * @param {number} [o.heartbeatMs]
+   * @param {number} [o.pollMs]
+   * @param {number} [o.timeoutMs]  the server's lease timeout
+   * @param {() => number} [o.now]
+   * @param {(fn: () => void, ms: number) => any} [o.setTimer]
+   * @param {(t: any) => void} [o.clearTimer]
+   * @param {() => void} [o.onUnauthorized]  the session ended (401)
+   */
+  constructor(o = {}) {
+    this.api = o.api ?? defaultApi;
+    this.heartbeatMs = o.heartbeatMs ?? 500;
+    this.pollMs = o.pollMs ?? 1500;
+    this.timeoutMs = o.timeoutMs ?? 2000;
+    this.now = o.now ?? Date.now;
+    this.setTimer = o.setTimer ?? ((fn, ms) => setTimeout(fn, ms));
+    this.clearTimer = o.clearTimer ?? ((t) => clearTimeout(t));
+    this.onUnauthorized = o.onUnauthorized ?? (() => {});
+  }
+
+  /** Someone shows the lease: keep it fresh. Returns the function that stops watching. */
+  watch() {
+    this.#watchers++;
+    if (this.#watchers === 1 && !this.#you) this.#tick();
+    let done = false;
+    return () => {
+      if (done) return;
+      done = true;
+      this.#watchers--;
+      this.#schedule();
+    };
+  }
+
+  /** Ask the server who holds control now. */
+  async refresh() {
+    const epoch = this.#epoch;
+    const r = await this.api.control();
+    if (epoch !== this.#epoch) return;
+    this.#handleRead(r);
+  }
+
+  /**
+   * Take control (force: take it over from another session; only roles allowed to).
+   * Resolves with the view; throws an Error with the server's message when refused or offline.
+   * @param {{ force?: boolean }} [o]
+   */
+  async take(o = {}) {
+    const epoch = ++this.#epoch;
+    const r = await this.api.controlTake(o.force ? { force: true } : undefined);
+    if (epoch !== this.#epoch) throw new Error('Superseded by a newer control request');
+    if (r.kind === 'ok') {
+      this.reachable = true;
+      this.lost = null;
+      this.#lastOk = this.now();
+      this.#apply(r.data);
+      this.#schedule();
+      return r.data;
+    }
+    if (r.kind === 'offline') {
+      this.reachable = false;
+      throw new Error('Offline: control was not taken');
+    }
+    if (r.kind === 'unauthorized') {
+      this.onUnauthorized();
+      throw new Error(r.error);
+    }
+    this.reachable = true;
+    if (r.data && 'holder' in r.data) this.holder = r.data.holder ?? null;
+    throw new Error(r.error || 'Control was not taken');
+  }
+
+  /** Give control back. Throws only when the server answers with an error other than "offline". */
+  async release() {
+    const epoch = ++this.#epoch;
+    const wasYou = this.#you;
+    // Stop heartbeating at once: even if the release does not reach the server, the lease ends in 2 s.
+    this.you = false;
+    if (wasYou) this.holder = null;
+    this.#schedule();
+    const r = await this.api.controlRelease();
+    if (epoch !== this.#epoch) return;
+    if (r.kind === 'unauthorized') this.onUnauthorized();
+    else if (r.kind === 'error') throw new Error(r.error || 'Release failed');
+    this.reachable = r.kind !== 'offline';
+    if (this.#watchers > 0) this.#tick();
+  }
+
+  /**
+   * Release with a notice saying why (e.g. the app went to the background).
+   * @param {string} reason
+   */
+  async releaseBecause(reason) {
+    if (!this.#you) return;
+    this.lost = { reason, at: this.now() };
+    try {
+      await this.release();
+    } catch {
+      /* the lease expires on its own */
+    }
+  }
+
+  dismissLost() {
+    this.lost = null;
+  }
+
+  /** Forget everything and stop all timers (logout). Does not call the server. */
+  reset() {
+    this.#epoch++;
+    if (this.#timer !== null) this.clearTimer(this.#timer);
+    this.#timer = null;
+    this.#watchers = 0;
+    this.holder = null;
+    this.you = false;
+    this.reachable = false;
+    this.lost = null;
+  }
+
+  /** @param {{ holder?: LeaseHolder | null, you?: boolean } | null} view */
+  #apply(view) {
+    const wasYou = this.#you;
+    this.holder = view?.holder ?? null;
+    this.you = view?.you === true;
+    if (this.#you && !wasYou) this.#lastOk = this.now();
+  }
+
+  /** @param {string} reason */
+  #lose(reason) {
+    this.you = false;
+    this.lost = { reason, at: this.now() };
+  }
+
+  /** An answer to GET /api/control. @param {import('./api.js').ApiResult} r */
+  #handleRead(r) {
+    if (r.kind === 'ok') {
+      this.reachable = true;
+      const wasYou = this.#you;
+      this.#apply(r.data);
+      if (wasYou && !this.#you) this.#lose(this.holder ? `taken over by ${holderLabel(this.holder)}` : 'the lease expired');
+    } else if (r.kind === 'offline') {
+      this.reachable = false;
+    } else if (r.kind === 'unauthorized') {
+      this.onUnauthorized();
+    }
+  }
+
+  async #heartbeat() {
+    const epoch = this.#epoch;
+    const r = await this.api.controlHeartbeat();
+    if (epoch !== this.#epoch || !this.#you) return;
+    if (r.kind === 'ok') {
+      this.reachable = true;
+      this.#lastOk = this.now();
+      this.#apply(r.data);
+      if (!this.#you) this.#lose('the server no longer counts this session as the holder');
+      return;
+    }
+    if (r.kind === 'unauthorized') {
+      this.#lose('the session ended');
+      this.onUnauthorized();
+      return;
+    }
+    if (r.kind === 'offline') {
+      this.reachable = false;
+      // The server drops a silent holder after its timeout: by now it has.
+      if (this.now() - this.#lastOk > this.timeoutMs) this.#lose('the server could not be reached');
+      return;
+    }
+    this.reachable = true;
+    if (r.status === 409) {
+      const h = r.data?.holder ?? null;
+      this.holder = h;
+      this.#lose(h ? `taken over by ${holderLabel(h)}` : 'the lease expired (no heartbeat reached the server in time)');
+    }
+  }
+
+  async #tick() {
+    if (this.#timer !== null) this.clearTimer(this.#timer);
+    this.#timer = null;
+    if (this.#inflight) return;
+    this.#inflight = true;
+    try {
+      if (this.#you) await this.#heartbeat();
+      else if (this.#watchers > 0) await this.refresh();
+    } catch {
+      /* the API client does not throw; keep the loop alive anyway */
+    } finally {
+      this.#inflight = false;
+      this.#schedule();
+    }
+  }
+
+  #schedule() {
+    if (this.#inflight) return; // #tick schedules when its request is answered
+    if (this.#timer !== null) this.clearTimer(this.#timer);
+    this.#timer = null;
+    const ms = this.#you ? this.heartbeatMs : this.#watchers > 0 ? this.pollMs : 0;
+    if (ms) this.#timer = this.setTimer(() => this.#tick(), ms);
+  }
+}
+
+/** The app's lease view (the shell resets it on logout; lease bars watch it). */
+export const lease = new ControlLease({ onUnauthorized: () => session.expire() });

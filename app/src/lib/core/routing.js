@@ -1,0 +1,86 @@
+/**
+ * Routing and the menu, from the feature list (features/index.js). The server decides which features a
+ * role may see (GET /api/config -> pages); the list says which ones this build has.
+ * Every function takes the list as its last argument (default: the app's), so tests can add features.
+ */
+import { features as appFeatures } from '../features/index.js';
+
+/** @typedef {import('../features/index.js').FeatureEntry} FeatureEntry */
+
+/** @param {string} id @param {FeatureEntry[]} [list] @returns {FeatureEntry | undefined} */
+export function featureById(id, list = appFeatures) {
+  return list.find((p) => p.id === id);
+}
+
+/**
+ * The feature owning a URL path (exact match after trimming a trailing slash).
+ * @param {string} pathname
+ * @param {FeatureEntry[]} [list]
+ * @returns {FeatureEntry | undefined}
+ */
+export function featureByPath(pathname, list = appFeatures) {
+  const p = pathname.length > 1 ? pathname.replace(/\/+$/, '') : pathname;
+  return list.find((e) => e.path === p);
+}
+
+/**
+ * Menu entries: the pages the server allows, in the server's order, limited to the features this
+ * build has. The server's title wins (it comes from the cell file).
+ * @param {{ id: string, title?: string }[] | undefined} allowed
+ * @param {FeatureEntry[]} [list]
+ * @returns {FeatureEntry[]}
+ */
+export function menuPages(allowed, list = appFeatures) {
+  if (!Array.isArray(allowed)) return [];
+  /** @type {FeatureEntry[]} */
+  const out = [];
+  for (const a of allowed) {
+    const entry = list.find((k) => k.id === a?.id);
+    if (entry && !out.some((o) => o.id === entry.id)) out.push({ ...entry, title: a.title || entry.title });
+  }
+  return out;
+}
+
+/**
+ * @param {string} id
+ * @param {{ id: string }[] | undefined} allowed
+ */
+export function isAllowed(id, allowed) {
+  return Array.isArray(allowed) && allowed.some((a) => a?.id === id);
+}
+
+/**
+ * What the shell should draw for a URL, given the pages the role may see.
+ * 'denied' never loads the page component, so its API calls are not even made.
+ * @param {string} pathname
+ * @param {{ id: string }[] | undefined} allowed
+ * @param {FeatureEntry[]} [list]
+ * @returns {{ kind: 'page' | 'denied', entry: FeatureEntry } | { kind: 'not-found' }}
+ */
+export function routeAccess(pathname, allowed, list = appFeatures) {
+  const entry = featureByPath(pathname, list);
+  if (!entry) return { kind: 'not-found' };
+  return { kind: isAllowed(entry.id, allowed) ? 'page' : 'denied', entry };
+}
+
+/**
+ * The page title: the cell file's title for the feature when the role sees it, else the list's.
+ * @param {ReturnType<typeof routeAccess>} access
+ * @param {{ id: string, title?: string }[] | undefined} allowed
+ */
+export function pageTitle(access, allowed) {
+  if (access.kind === 'not-found') return 'Not found';
+  if (access.kind === 'denied') return 'Access denied';
+  const id = access.entry.id;
+  return (Array.isArray(allowed) && allowed.find((a) => a?.id === id)?.title) || access.entry.title;
+}
+
+/**
+ * Where to go after login: only same-origin absolute paths, never the login page itself.
+ * @param {string | null | undefined} next
+ */
+export function safeNext(next) {
+  if (!next || !next.startsWith('/') || next.startsWith('//') || next.startsWith('/\\')) return '/';
+  if (next === '/login' || next.startsWith('/login?') || next.startsWith('/login/')) return '/';
+  return next;
+}

@@ -1,0 +1,35 @@
+/**
+ * The app's feature list: the one place that says which features (pages) this build has.
+ * Routing (the catch-all route), the menu and the menu icons all come from here.
+ *
+ * A feature is a folder `features/<id>/` (Page.svelte, its parts, plain-JS logic, its icon) plus one
+ * entry below. Its id is the page id of the cell file, the /api/config `features` key and the ROS
+ * namespace /cell/<id>/. The server decides which features a role sees (GET /api/config -> pages) and
+ * the cell file's title wins over `title` here.
+ */
+import homeIcon from './home/icon.js';
+import systemIcon from './system/icon.js';
+
+/** SVG path data (24x24, stroked) or a small component taking `size`. @typedef {string | import('svelte').Component<{ size?: number }>} IconSpec */
+
+/**
+ * What the shell passes to a feature's page.
+ * @typedef {object} PageProps
+ * @property {FeatureEntry} feature  this entry, with the cell file's title
+ * @property {any} [section]  this feature's part of the cell file (/api/config `features[id]`), if any
+ */
+
+/**
+ * @typedef {object} FeatureEntry
+ * @property {string} id
+ * @property {string} path  the URL path ('/' for home)
+ * @property {string} title  default title (the cell file's wins)
+ * @property {IconSpec} icon
+ * @property {() => Promise<{ default: import('svelte').Component<any> }>} load  lazy page import
+ */
+
+/** @type {FeatureEntry[]} */
+export const features = [
+  { id: 'home', path: '/', title: 'Home', icon: homeIcon, load: () => import('./home/Page.svelte') },
+  { id: 'system', path: '/system', title: 'System', icon: systemIcon, load: () => import('./system/Page.svelte') },
+];

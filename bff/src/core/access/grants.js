@@ -1,0 +1,59 @@
+// A role's rosbridge grants, derived from the feature list and the cell file: pure functions, tested on their own.
+// - every role reads the operation mode (the shell shows it everywhere);
+// - a role reads what the features of its pages read;
+// - it sends a feature's commands where `roles.<role>.commands` lists that feature;
+// - it may stop the robot wherever one of its pages can move it (stop is never lease-gated);
+// - `roles.<role>.ros` adds raw grants (an escape hatch).
+import { namesOf, mergeNames, isEmpty } from '../features/feature.js';
+
+/** @typedef {import('../features/feature.js').Feature} Feature @typedef {import('../config/cell-types.js').Cell} Cell */
+
+/** @param {Feature[]} features @param {string} id */
+const byId = (features, id) => features.find((f) => f.id === id);
+
+/** Does any page of the role belong to a feature that can move the robot? */
+export function mayMoveRobot(/** @type {Cell} */ cell, /** @type {Feature[]} */ features, /** @type {string} */ role) {
+  return (cell.roles[role]?.pages || []).some((p) => {
+    const f = byId(features, p);
+    return !!f && !isEmpty(namesOf(f, 'motion', cell));
+  });
+}
+
+/** @param {Cell} cell @param {Feature[]} features */
+export function stopNames(cell, features) {
+  return mergeNames(...features.map((f) => namesOf(f, 'stop', cell)));
+}
+
+/**
+ * @param {Cell} cell @param {Feature[]} features @param {string} role
+ * @returns {Required<import('../features/feature.js').RosNames>}
+ */
+export function grantsFor(cell, features, role) {
+  const def = cell.roles[role];
+  if (!def) return mergeNames();
+  const om = cell.operation_mode;
+  const parts = [{ subscribe: [om.topic], call_service: om.get_service ? [om.get_service] : [] }];
+  for (const p of def.pages) {
+    const f = byId(features, p);
+    if (f) parts.push(namesOf(f, 'reads', cell));
+  }
+  for (const c of def.commands || []) {
+    const f = byId(features, c);
+    if (f && def.pages.includes(c)) parts.push(namesOf(f, 'commands', cell), namesOf(f, 'motion', cell));
+  }
+  if (mayMoveRobot(cell, features, role)) parts.push(stopNames(cell, features));
+  parts.push(def.ros || {});
+  return mergeNames(...parts);
+}
+
+/** Names whose publish or call needs the control lease: every feature's motion commands. */
+export function motionNames(/** @type {Cell} */ cell, /** @type {Feature[]} */ features) {
+  return mergeNames(...features.map((f) => namesOf(f, 'motion', cell)));
+}
+
+/** The service behind the app's "Stop robot" button, for a role that may move the robot. */
+export function robotStopFor(/** @type {Cell} */ cell, /** @type {Feature[]} */ features, /** @type {string} */ role) {
+  if (!mayMoveRobot(cell, features, role)) return null;
+  const f = features.find((x) => x.robotStop && (!x.schema || cell[x.id] !== undefined));
+  return f?.robotStop ?? null;
+}

@@ -1,0 +1,49 @@
+// POST /api/auth/login, POST /api/auth/logout, GET /api/auth/me
+import { Router } from 'express';
+import { setSessionCookie, clearSessionCookie } from './session.js';
+
+/**
+ * @param {{users: import('../auth/users.js').UserStore, tokens: import('../auth/tokens.js').TokenService,
+ *   throttle: import('../auth/throttle.js').LoginThrottle, audit: import('../audit/audit-log.js').AuditLog,
+ *   onLogout: (s: {username: string, sid: string}) => void}} deps
+ */
+export function authRoutes({ users, tokens, throttle, audit, onLogout }) {
+  const r = Router();
+  r.post('/api/auth/login', async (req, res) => {
+    const { username, password } = req.body;
+    const keys = [`user:${username}`, `ip:${req.ip}`];
+    const entry = { user: String(username).slice(0, 64), role: null, ip: req.ip || null, op: 'login' };
+    const wait = throttle.retryAfter(keys);
+    if (wait > 0) {
+      audit.record({ ...entry, outcome: 'denied', detail: 'throttled' });
+      res.setHeader('Retry-After', String(wait));
+      return res.status(429).json({ error: `Too many failed attempts. Try again in ${wait} s.` });
+    }
+    const user = await users.authenticate(username, password);
+    if (!user) {
+      throttle.fail(keys);
+      audit.record({ ...entry, outcome: 'denied', detail: 'wrong user name or password' });
+      return res.status(401).json({ error: 'Invalid user name or password' });
+    }
+    throttle.succeed(keys);
+    setSessionCookie(res, tokens.issue(user), req.secure, tokens.ttlS);
+    audit.record({ ...entry, role: user.role, outcome: 'ok' });
+    res.json(user);
+  });
+  r.post('/api/auth/logout', (req, res) => {
+    const s = req.session;
+    if (s) {
+      tokens.revoke(s.claims);
+      onLogout(s);
+      audit.record({ user: s.username, role: s.role, ip: req.ip || null, op: 'logout', outcome: 'ok' });
+    }
+    clearSessionCookie(res, req.secure);
+    res.status(204).end();
+  });
+  r.get('/api/auth/me', (req, res) => {
+    const s = req.session;
+    if (!s) return res.status(401).json({ error: 'Not logged in' });
+    res.json({ username: s.username, role: s.role });
+  });
+  return r;
+}

@@ -1,0 +1,201 @@
+// HTTP API of the database page: /api/database/... (session + page 'database' required).
+import fsp from 'node:fs/promises';
+import path from 'node:path';
+import express, { Router } from 'express';
+import multer from 'multer';
+import { DatabaseError } from './database-files.js';
+
+/**
+ * @param {{service: import('./database-files.js').DatabaseFiles, guard: import('express').RequestHandler[],
+ *   uploadDir?: string, log?: (m: string) => void}} deps
+ *   guard: session + page checks from the core (FeatureDeps.guard).
+ *   uploadDir: where multipart uploads are spooled (default DATA_DIR/.uploads; one fresh directory per request, always removed).
+ */
+export function databaseRoutes({ service, guard, uploadDir, log = (m) => console.log(`[bff] ${m}`) }) {
+  const spool = uploadDir || path.join(service.dataDir, '.uploads');
+  const r = Router();
+  const json = express.json({ limit: '16kb' });
+  const actor = (req) => ({ username: req.session.username, role: req.session.role, ip: req.ip ?? req.socket?.remoteAddress ?? null });
+
+  /** @param {(req: import('express').Request) => Promise<unknown>} fn @param {number} [okStatus] */
+  const handle = (fn, okStatus = 200) => async (req, res) => {
+    try {
+      res.status(okStatus).json(await fn(req));
+    } catch (e) {
+      sendError(res, e, log);
+    }
+  };
+  const body = (req, ...keys) => {
+    if (!req.is('application/json')) throw new DatabaseError(415, 'expected application/json');
+    const b = req.body;
+    if (!b || typeof b !== 'object' || Array.isArray(b)) throw new DatabaseError(400, 'expected a JSON object');
+    for (const k of keys) if (typeof b[k] !== 'string' || b[k] === '') throw new DatabaseError(400, `"${k}" must be a non-empty string`);
+    return b;
+  };
+
+  r.get('/api/database/files', ...guard, handle(async () => ({ max_upload_bytes: service.maxBytes, files: await service.listTargets() })));
+  r.get('/api/database/drives', ...guard, handle(async () => ({ drives: await service.listDrives() })));
+  r.get('/api/database/drives/:drive/files', ...guard, handle(async (req) => {
+    const p = req.query.path ?? '';
+    if (typeof p !== 'string') throw new DatabaseError(400, 'invalid path');
+    return service.listDriveFiles(req.params.drive, p);
+  }));
+  r.post('/api/database/files/:name/from-drive', ...guard, json, handle(async (req) => {
+    const b = body(req, 'drive', 'path');
+    return service.replaceFromDrive(req.params.name, b.drive, b.path, actor(req));
+  }));
+  r.get('/api/database/files/:name/backups', ...guard, handle(async (req) => ({ backups: await service.listBackups(req.params.name) })));
+  r.post('/api/database/files/:name/restore', ...guard, json, handle(async (req) => {
+    const b = body(req, 'backup');
+    return service.restoreBackup(req.params.name, b.backup, actor(req));
+  }));
+
+  const upload = multer({
+    storage: multer.diskStorage({
+      destination: (req, file, cb) => cb(null, req.uploadDir),
+      filename: (req, file, cb) => cb(null, 'upload'),
+    }),
+    limits: { fileSize: service.maxBytes, files: 1, fields: 4, parts: 6 },
+  }).single('file');
+
+  r.post('/api/database/files/:name/upload', ...guard, async (req, res) => {
+    let dir = null;
+    let received = false; // past this point the service audits
+    let result;
+    let error = null;
+    try {
+      // Unknown targets and names are refused before anything is received.
+      await service.listBackups(req.params.name);
+      if (!req.is('multipart/form-data')) throw new DatabaseError(415, 'expected multipart/form-data with a field "file"');
+      const declared = Number(req.headers['content-length']);
+      if (Number.isFinite(declared) && declared > service.maxBytes + 64 * 1024) throw tooLarge(service.maxBytes);
+      await fsp.mkdir(spool, { recursive: true, mode: 0o700 });
+      dir = await fsp.mkdtemp(path.join(spool, 'up-'));
+      req.uploadDir = dir;
+      await new Promise((resolve, reject) => upload(req, res, (err) => (err ? reject(err) : resolve())));
+      if (!req.file) throw new DatabaseError(400, 'no file in field "file"');
+      received = true;
+      result = await service.replaceFromUpload(req.params.name, req.file.path, req.file.originalname, actor(req));
+    } catch (e) {
+      error = e instanceof multer.MulterError
+        ? (e.code === 'LIMIT_FILE_SIZE' ? tooLarge(service.maxBytes) : new DatabaseError(400, `bad upload: ${e.message}`))
+        : e;
+      if (!received && error instanceof DatabaseError) {
+        const a = actor(req);
+        service.audit?.record({ user: a.username, role: a.role, ip: a.ip, op: 'database.replace', target: String(req.params.name), outcome: 'denied', detail: `upload: ${error.message}` });
+      }
+    }
+    // The spooled upload is gone before the answer goes out.
+    if (dir) await fsp.rm(dir, { recursive: true, force: true }).catch((e) => log(`database: could not remove ${dir}: ${e.message}`));
+    if (!error) return res.json(result);
+    // Refused before reading the body: answer and close instead of reading it all.
+    if (!dir) res.setHeader('Connection', 'close');
+    sendError(res, error, log);
+  });
+  return r;
+}
+
+const tooLarge = (max) => new DatabaseError(413, `the file is larger than the limit of ${max} bytes`);
+
+function sendError(res, e, log) {
+  if (res.headersSent) return;
+  if (e instanceof DatabaseError) return res.status(e.status).json({ error: e.message });
+  if (e?.type === 'entity.parse.failed') return res.status(400).json({ error: 'malformed JSON body' });
+  log(`database: ${e?.stack || e}`);
+  res.status(500).json({ error: 'internal error' });
+}
+
+/** OpenAPI 3.1 path objects for these routes; the core merges every feature's into the document. */
+export const databaseOpenApiPaths = (() => {
+  const json = (schema) => ({ content: { 'application/json': { schema } } });
+  const error = { type: 'object', required: ['error'], properties: { error: { type: 'string' } } };
+  const err = (description) => ({ description, ...json(error) });
+  const common = { 401: err('Not logged in'), 403: err('Role may not use the database page') };
+  const name = { name: 'name', in: 'path', required: true, description: 'A file listed in the cell file (database.files)', schema: { type: 'string', pattern: '^[A-Za-z0-9][A-Za-z0-9_.-]*$' } };
+  const drive = { name: 'drive', in: 'path', required: true, description: 'Drive id from GET /api/database/drives', schema: { type: 'string' } };
+  const target = {
+    type: 'object', required: ['name', 'size', 'mtime', 'exists'],
+    properties: { name: { type: 'string' }, size: { type: ['integer', 'null'] }, mtime: { type: ['string', 'null'], format: 'date-time' }, exists: { type: 'boolean' } },
+  };
+  const replaced = {
+    type: 'object', required: ['file', 'backup'],
+    properties: { file: target, backup: { type: ['string', 'null'], description: 'Name of the backup of the old file (null when there was none)' } },
+  };
+  const writeErrors = {
+    ...common,
+    400: err('Bad input (names, paths)'), 404: err('Unknown file, drive, path or backup'), 413: err('File larger than database.max_upload_bytes'),
+    415: err('Wrong file extension or content type'), 422: err('Content does not parse (CSV, JSON, YAML)'), 500: err('Writing failed; the old file is unchanged'),
+  };
+  return {
+    '/api/database/files': {
+      get: {
+        summary: 'Database files that may be replaced', security: [{ session: [] }],
+        responses: { 200: { description: 'Files', ...json({ type: 'object', required: ['files'], properties: { max_upload_bytes: { type: 'integer' }, files: { type: 'array', items: target } } }) }, ...common },
+      },
+    },
+    '/api/database/drives': {
+      get: {
+        summary: 'USB drives currently present', security: [{ session: [] }],
+        responses: {
+          200: { description: 'Drives', ...json({ type: 'object', required: ['drives'], properties: { drives: { type: 'array', items: {
+            type: 'object', required: ['id', 'label', 'path'], properties: { id: { type: 'string' }, label: { type: 'string' }, path: { type: 'string' } },
+          } } } }) },
+          ...common,
+        },
+      },
+    },
+    '/api/database/drives/{drive}/files': {
+      get: {
+        summary: 'Directories and files on a drive', security: [{ session: [] }],
+        parameters: [drive, { name: 'path', in: 'query', required: false, description: 'Directory relative to the drive root', schema: { type: 'string' } }],
+        responses: {
+          200: { description: 'Listing', ...json({ type: 'object', required: ['drive', 'path', 'entries'], properties: {
+            drive: { type: 'string' }, path: { type: 'string' },
+            entries: { type: 'array', items: { type: 'object', required: ['name', 'type'], properties: {
+              name: { type: 'string' }, type: { enum: ['dir', 'file'] }, size: { type: 'integer' }, mtime: { type: 'string', format: 'date-time' },
+              targets: { type: 'array', items: { type: 'string' }, description: 'Database files this file could replace (same extension)' },
+            } } },
+          } }) },
+          ...common, 400: err('Bad path'), 404: err('Unknown drive or path'),
+        },
+      },
+    },
+    '/api/database/files/{name}/from-drive': {
+      post: {
+        summary: 'Replace a database file with a file from a USB drive (old file kept as a backup)', security: [{ session: [] }],
+        parameters: [name],
+        requestBody: { required: true, ...json({ type: 'object', additionalProperties: false, required: ['drive', 'path'],
+          properties: { drive: { type: 'string', minLength: 1 }, path: { type: 'string', minLength: 1, description: 'File path relative to the drive root' } } }) },
+        responses: { 200: { description: 'Replaced', ...json(replaced) }, ...writeErrors },
+      },
+    },
+    '/api/database/files/{name}/upload': {
+      post: {
+        summary: 'Replace a database file with an uploaded file (old file kept as a backup)', security: [{ session: [] }],
+        parameters: [name],
+        requestBody: { required: true, content: { 'multipart/form-data': { schema: { type: 'object', required: ['file'], properties: { file: { type: 'string', format: 'binary' } } } } } },
+        responses: { 200: { description: 'Replaced', ...json(replaced) }, ...writeErrors },
+      },
+    },
+    '/api/database/files/{name}/backups': {
+      get: {
+        summary: 'Backups of a database file, newest first', security: [{ session: [] }],
+        parameters: [name],
+        responses: {
+          200: { description: 'Backups', ...json({ type: 'object', required: ['backups'], properties: { backups: { type: 'array', items: {
+            type: 'object', required: ['name', 'size', 'mtime'], properties: { name: { type: 'string' }, size: { type: 'integer' }, mtime: { type: 'string', format: 'date-time' } },
+          } } } }) },
+          ...common, 400: err('Bad name'), 404: err('Unknown file'),
+        },
+      },
+    },
+    '/api/database/files/{name}/restore': {
+      post: {
+        summary: 'Restore a backup (the current file is backed up first)', security: [{ session: [] }],
+        parameters: [name],
+        requestBody: { required: true, ...json({ type: 'object', additionalProperties: false, required: ['backup'], properties: { backup: { type: 'string', minLength: 1 } } }) },
+        responses: { 200: { description: 'Restored', ...json(replaced) }, ...writeErrors },
+      },
+    },
+  };
+})();

@@ -1,0 +1,84 @@
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import path from 'node:path';
+import { spawnSync } from 'node:child_process';
+import yaml from 'js-yaml';
+import { loadCell, validateCell, CellConfigError } from '../../src/core/config/cell.js';
+import { REPO_ROOT } from '../../src/core/config/env.js';
+import { pagesFor, configFor, mayViewPage } from '../../src/core/access/pages.js';
+import { tempDir } from '../helpers.js';
+import { FEATURES } from '../../src/features/index.js';
+
+const DEMO = path.join(REPO_ROOT, 'config/demo-cell.yaml');
+const demo = () => yaml.load(fs.readFileSync(DEMO, 'utf8'));
+
+test('the demo cell file is valid and has a section for every feature', () => {
+  const cell = loadCell(DEMO, FEATURES);
+  for (const f of FEATURES) if (f.schema) assert.ok(cell[f.id], `section ${f.id}`);
+  assert.equal(FEATURES.filter((f) => f.schema).length, 9);
+});
+
+const broken = [
+  ['unknown top-level field', (d) => { d.colour = 'red'; }, /unknown field "colour"/],
+  ['missing cell name', (d) => { delete d.cell.name; }, /cell: missing field "name"/],
+  ['role page that does not exist', (d) => { d.roles.operator.pages.push('nowhere'); }, /roles\.operator\.pages\[5\]: unknown page "nowhere"/],
+  ['wrong type', (d) => { d.operation_mode.modes = 'idle'; }, /operation_mode\.modes: must be array/],
+  ['bad ROS name', (d) => { d.operation_mode.topic = 'cell mode'; }, /operation_mode\.topic: must match pattern/],
+  ['initial mode not listed', (d) => { d.operation_mode.initial = 'dancing'; }, /operation_mode\.initial: "dancing"/],
+  ['graph kind', (d) => { d.sensors[0].kind = 'pie'; }, /sensors\[0\]\.kind: must be one of time-series, scatter/],
+  ['path escape in database dir', (d) => { d.database.directory = '../etc'; }, /database\.directory: must match pattern/],
+  ['page without a feature', (d) => { d.pages.push({ id: 'bogus', title: 'Bogus' }); }, /pages\[11\]: no feature "bogus"/],
+  ['page without its section', (d) => { delete d.sensors; }, /pages\[4\]: page "sensors" needs the "sensors" section/],
+  ['commands of a feature the role does not see', (d) => { d.roles.operator.commands.push('manual'); }, /roles\.operator\.commands\[2\]: "manual" is not one of the role's pages/],
+  ['commands of a feature that has none', (d) => { d.roles.admin.commands.push('sensors'); }, /roles\.admin\.commands\[6\]: feature "sensors" has no commands/],
+  ['module role that does not exist', (d) => { d.modules[0].roles = ['ghost']; }, /modules\[0\]\.roles\[0\]: unknown role "ghost"/],
+  ['old motion section name', (d) => { d.motion = d.manual; }, /unknown field "motion"/],
+];
+for (const [name, mutate, expected] of broken) {
+  test(`a cell file with ${name} is refused with the field named`, () => {
+    const d = demo();
+    mutate(d);
+    assert.throws(() => validateCell(d, 'x.yaml', FEATURES), (e) => e instanceof CellConfigError && expected.test(e.message));
+  });
+}
+
+test('YAML syntax errors and missing files are CellConfigErrors', () => {
+  const dir = tempDir();
+  fs.writeFileSync(path.join(dir, 'bad.yaml'), 'cell: [unclosed');
+  assert.throws(() => loadCell(path.join(dir, 'bad.yaml'), FEATURES), /YAML syntax/);
+  assert.throws(() => loadCell(path.join(dir, 'none.yaml'), FEATURES), /cannot read: ENOENT/);
+});
+
+test('check-config CLI: exit 0 on the demo, exit 2 naming the bad field otherwise', () => {
+  const ok = spawnSync(process.execPath, ['bff/src/cli/check-config.js', DEMO], { cwd: REPO_ROOT, encoding: 'utf8' });
+  assert.equal(ok.status, 0, ok.stderr);
+  const dir = tempDir();
+  const d = demo();
+  d.roles.admin.ros.publish = [42];
+  fs.writeFileSync(path.join(dir, 'c.yaml'), yaml.dump(d));
+  const bad = spawnSync(process.execPath, ['bff/src/cli/check-config.js', path.join(dir, 'c.yaml')], { cwd: REPO_ROOT, encoding: 'utf8' });
+  assert.equal(bad.status, 2);
+  assert.match(bad.stderr, /roles\.admin\.ros\.publish\[0\]: must be string/);
+});
+
+test('pages and config are filtered by role', () => {
+  const cell = loadCell(DEMO, FEATURES);
+  assert.deepEqual(pagesFor(cell, 'operator').map((p) => p.id), ['home', 'process', 'sensors', 'video', 'alarms']);
+  assert.ok(pagesFor(cell, 'admin').some((p) => p.id === 'system'));
+  assert.deepEqual(pagesFor(cell, 'nobody'), []);
+  assert.equal(mayViewPage(cell, 'operator', 'system'), false);
+  assert.equal(mayViewPage(cell, 'admin', 'system'), true);
+  const c = configFor(cell, FEATURES, 'operator');
+  assert.equal(c.role, 'operator');
+  assert.equal(c.operation_mode.topic, '/cell/mode');
+  assert.equal(c.roles, undefined, 'the grants of other roles are not sent');
+  assert.deepEqual(Object.keys(c.features).sort(), ['alarms', 'process', 'sensors', 'video']);
+  assert.deepEqual(c.commands, ['process', 'alarms']);
+  assert.deepEqual(c.control, { take_over: false });
+  assert.deepEqual(c.stop, { service: '/cell/manual/stop', type: 'std_srvs/Trigger' }, 'the process moves the robot');
+  const a = configFor(cell, FEATURES, 'admin');
+  assert.equal(a.control.take_over, true);
+  assert.equal(a.features.parameters.csv, undefined, 'paths on the robot PC stay there');
+  assert.equal(a.features.database.directory, undefined);
+});

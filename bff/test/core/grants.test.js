@@ -1,0 +1,108 @@
+// Grants come from the features: a table generated from the feature list and the demo cell file.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import path from 'node:path';
+import { loadCell } from '../../src/core/config/cell.js';
+import { REPO_ROOT } from '../../src/core/config/env.js';
+import { grantsFor, motionNames, stopNames, mayMoveRobot } from '../../src/core/access/grants.js';
+import { namesOf, KINDS } from '../../src/core/features/feature.js';
+import { createOpGuard } from '../../src/core/ros/op-guard.js';
+import { ControlLease } from '../../src/core/control/lease.js';
+import { FEATURES } from '../../src/features/index.js';
+
+const cell = loadCell(path.join(REPO_ROOT, 'config/demo-cell.yaml'), FEATURES);
+const OPS = { publish: 'publish', call_service: 'call_service', subscribe: 'subscribe' };
+const msgFor = (kind, name, id) => (kind === 'call_service'
+  ? { op: 'call_service', id, service: name, args: {} }
+  : { op: OPS[kind], id, topic: name, ...(kind === 'publish' ? { msg: {} } : {}) });
+
+/** A guard over the demo cell with a role whose grants are derived from `def` (no escape hatch). */
+function guardFor(roles) {
+  const c = { ...cell, roles };
+  const grants = new Map(Object.keys(roles).map((r) => [r, grantsFor(c, FEATURES, r)]));
+  const lease = new ControlLease();
+  const audit = { entries: [], record(e) { this.entries.push(e); } };
+  const guard = createOpGuard({ grantsOf: (r) => grants.get(r), motion: motionNames(c, FEATURES), lease, audit });
+  const ctx = (role, sid) => ({ session: { username: role, role, sid }, ip: '127.0.0.1', rosapiCalls: new Map(), lastPublishAudit: new Map() });
+  const send = (cx, m) => guard.inspect(cx, Buffer.from(JSON.stringify(m)), false);
+  return { lease, ctx, send };
+}
+
+const motionRows = FEATURES.flatMap((f) => ['publish', 'call_service'].flatMap((kind) => (namesOf(f, 'motion', cell)[kind] || []).map((name) => ({ f, kind, name }))));
+
+test('the feature list declares motion commands (the table below is not empty)', () => {
+  assert.ok(motionRows.length >= 5, JSON.stringify(motionRows.map((r) => r.name)));
+  assert.ok(motionRows.some((r) => r.name === '/cell/process/run/goal'), 'the process action goal moves the robot');
+});
+
+for (const { f, kind, name } of motionRows) {
+  test(`${f.id}: ${kind} ${name} needs the command grant and the control lease`, () => {
+    const { lease, ctx, send } = guardFor({
+      commander: { pages: [f.id], commands: [f.id] },
+      viewer: { pages: [f.id] },
+    });
+    const viewer = ctx('viewer', 'v');
+    const refused = send(viewer, msgFor(kind, name, 'x1'));
+    assert.equal(refused.forward, false);
+    assert.match(refused.replies[0].data.toString(), /not allowed to/);
+
+    const cmd = ctx('commander', 'c');
+    const noLease = send(cmd, msgFor(kind, name, 'x2'));
+    assert.equal(noLease.forward, false, 'without the lease');
+    assert.match(noLease.replies[0].data.toString(), /needs control: take control first/);
+
+    assert.ok(lease.take(cmd.session).ok);
+    assert.equal(send(cmd, msgFor(kind, name, 'x3')).forward, true, 'with the lease');
+    const other = ctx('commander', 'c2');
+    assert.match(send(other, msgFor(kind, name, 'x4')).replies[0].data.toString(), /which commander holds/);
+  });
+}
+
+for (const f of FEATURES) {
+  for (const kind of ['publish', 'call_service']) {
+    for (const name of (namesOf(f, 'commands', cell)[kind] || []).filter((n) => !motionRows.some((r) => r.name === n))) {
+      test(`${f.id}: ${kind} ${name} needs the command grant, not the lease`, () => {
+        const { ctx, send } = guardFor({ commander: { pages: [f.id], commands: [f.id] }, viewer: { pages: [f.id] } });
+        assert.equal(send(ctx('viewer', 'v'), msgFor(kind, name, 'y1')).forward, false);
+        assert.equal(send(ctx('commander', 'c'), msgFor(kind, name, 'y2')).forward, true);
+      });
+    }
+  }
+}
+
+test('stop is never lease-gated: any role that sees a page that moves the robot may stop it', () => {
+  const stops = stopNames(cell, FEATURES);
+  assert.ok(stops.call_service.includes('/cell/manual/stop'));
+  for (const f of FEATURES.filter((x) => mayMoveRobot({ ...cell, roles: { r: { pages: [x.id] } } }, FEATURES, 'r'))) {
+    const { lease, ctx, send } = guardFor({ watcher: { pages: [f.id] }, holder: { pages: [f.id], commands: [f.id] } });
+    assert.ok(lease.take(ctx('holder', 'h').session).ok, 'someone else holds control');
+    for (const kind of ['publish', 'call_service']) {
+      for (const name of stops[kind]) assert.equal(send(ctx('watcher', 'w'), msgFor(kind, name, 's')).forward, true, `${f.id}: ${name}`);
+    }
+  }
+  const { ctx, send } = guardFor({ reader: { pages: ['sensors'] } });
+  assert.equal(send(ctx('reader', 'r'), msgFor('call_service', '/cell/manual/stop', 's')).forward, false, 'a page that cannot move the robot gives no stop');
+});
+
+test('a role reads what its pages read, and only that (plus the operation mode)', () => {
+  for (const f of FEATURES) {
+    const g = grantsFor({ ...cell, roles: { r: { pages: [f.id] } } }, FEATURES, 'r');
+    const reads = namesOf(f, 'reads', cell);
+    for (const k of KINDS) for (const n of reads[k] || []) assert.ok(g[k].includes(n), `${f.id} ${k} ${n}`);
+    assert.deepEqual(g.advertise, []);
+  }
+  const none = grantsFor({ ...cell, roles: { r: { pages: ['home'] } } }, FEATURES, 'r');
+  assert.deepEqual(none.subscribe, ['/cell/mode']);
+  assert.deepEqual(none.call_service, ['/cell/get_mode']);
+  assert.deepEqual(none.publish, []);
+});
+
+test('the demo operator: process and alarm commands, no manual moves, the escape hatch adds /rosout_agg', () => {
+  const g = grantsFor(cell, FEATURES, 'operator');
+  assert.ok(g.call_service.includes('/cell/alarms/reset'));
+  assert.ok(g.call_service.includes('/cell/process/start'));
+  assert.ok(!g.call_service.includes('/cell/manual/move_named'));
+  assert.ok(!g.publish.includes('/cell/manual/jog'));
+  assert.ok(g.subscribe.includes('/rosout_agg'));
+  assert.ok(!g.subscribe.includes('/rosout'));
+});
