@@ -37,10 +37,12 @@ if want venv && [[ ! -x .venv/bin/python ]]; then
   log "creating .venv"
   /usr/bin/python3 -m venv --system-site-packages .venv
 fi
-s=$(stamp_of requirements.txt scripts/venv_first.py)
+s=$(stamp_of requirements.txt scripts/venv_first.py; grep -c ignore-installed scripts/bootstrap.sh)
 if want venv && ! fresh pip "$s"; then
   log "pip install -r requirements.txt"
-  .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt
+  # --ignore-installed: the whole dependency closure goes into the venv, even where a Debian package (e.g.
+  # python3-twisted, python3-openssl on a robot PC) seems to satisfy it; mixed copies break at import.
+  .venv/bin/python -m pip install -q --disable-pip-version-check --ignore-installed -r requirements.txt
   # The venv's own packages must win over Debian's (see scripts/venv_first.py).
   site=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
   cp scripts/venv_first.py "$site/_cell_venv_first.py"

@@ -1,11 +1,15 @@
 #!/usr/bin/env bash
-# Every suite, in order of speed: BFF unit, app unit, Python (unit + integration on live roscores),
+# Every suite, in order of speed: the type check, BFF unit, app unit, Python (unit + integration on live roscores),
 # the supervisor, then Playwright end to end against the whole stack. Stops at the first failing suite.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1
 t0=$(date +%s)
 step() { printf '\n=== %s ===\n' "$*"; }
+
+step "types (checkJs: tsc for bff, svelte-check for app)"
+npm run typecheck -w bff --silent
+npm run typecheck -w app --silent
 
 step "bff (node:test)"
 npm test -w bff --silent

@@ -26,7 +26,7 @@ export const VERSION = '0.1.0';
 export class StartupError extends Error {}
 
 /**
- * @param {import('./config/env.js').Env} env
+ * @param {import('./core/config/env.js').Env} env
  * @param {{log?: (m: string) => void, throttle?: LoginThrottle, features?: import('./core/features/feature.js').Feature[]}} [opts]
  *   features: the feature list (tests add fixture features)
  */

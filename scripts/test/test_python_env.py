@@ -20,13 +20,16 @@ def venv_python(code: str, *flags: str) -> dict:
 
 def test_venv_twisted_and_zope_win_and_rospy_is_visible() -> None:
     got = venv_python("""
-        import json, zope, zope.interface, twisted, twisted.internet.task, roslibpy, rospy
+        import json, zope, zope.interface, twisted, twisted.internet.task, roslibpy, rospy, OpenSSL, cryptography
         print(json.dumps({"zope_path": list(zope.__path__), "zope.interface": zope.interface.__file__,
-                          "twisted": twisted.__file__, "rospy": rospy.__file__}))
+                          "twisted": twisted.__file__, "rospy": rospy.__file__, "OpenSSL": OpenSSL.__file__,
+                          "cryptography": cryptography.__file__}))
     """)
     venv = str(ROOT / ".venv")
     assert got["zope.interface"].startswith(venv)
     assert got["twisted"].startswith(venv)
+    # Their dependencies too: Debian's pyOpenSSL with pip's cryptography fails at the first TLS import.
+    assert got["OpenSSL"].startswith(venv) and got["cryptography"].startswith(venv)
     assert got["zope_path"][0].startswith(venv)
     assert got["rospy"].startswith("/usr/lib/python3/dist-packages/")
 

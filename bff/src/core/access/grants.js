@@ -32,6 +32,7 @@ export function grantsFor(cell, features, role) {
   const def = cell.roles[role];
   if (!def) return mergeNames();
   const om = cell.operation_mode;
+  /** @type {import('../features/feature.js').RosNames[]} */
   const parts = [{ subscribe: [om.topic], call_service: om.get_service ? [om.get_service] : [] }];
   for (const p of def.pages) {
     const f = byId(features, p);

@@ -9,7 +9,7 @@ export function writeFileAtomic(file, data, mode = 0o600) {
   const tmp = path.join(dir, `.${path.basename(file)}.${process.pid}.${Date.now()}.tmp`);
   const fd = fs.openSync(tmp, 'wx', mode);
   try {
-    fs.writeSync(fd, data);
+    fs.writeSync(fd, Buffer.isBuffer(data) ? data : Buffer.from(data, 'utf8'));
     fs.fsyncSync(fd);
   } finally {
     fs.closeSync(fd);

@@ -4,7 +4,10 @@
 export class LoginThrottle {
   /** @param {{max?: number, windowMs?: number, cooldownMs?: number, now?: () => number}} [o] */
   constructor({ max = 5, windowMs = 5 * 60_000, cooldownMs = 5 * 60_000, now = Date.now } = {}) {
-    Object.assign(this, { max, windowMs, cooldownMs, now });
+    this.max = max;
+    this.windowMs = windowMs;
+    this.cooldownMs = cooldownMs;
+    this.now = now;
     /** @type {Map<string, {fails: number[], until: number}>} */
     this.keys = new Map();
   }

@@ -3,7 +3,10 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import yaml from 'js-yaml';
-import Ajv2020 from 'ajv/dist/2020.js';
+import Ajv2020Module from 'ajv/dist/2020.js';
+
+// ajv is CommonJS: under Node its default import is the class itself.
+const Ajv2020 = /** @type {typeof Ajv2020Module.default} */ (/** @type {unknown} */ (Ajv2020Module));
 import { REPO_ROOT } from './env.js';
 
 const SCHEMA_PATH = path.join(REPO_ROOT, 'config/cell.schema.json');

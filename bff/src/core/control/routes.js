@@ -9,7 +9,7 @@ export function controlRoutes({ lease, cell }) {
   r.get('/api/control', requireSession, (req, res) => res.json(view(req)));
   r.post('/api/control/take', requireSession, (req, res) => {
     const out = lease.take(req.session, { force: req.body?.force === true, mayTakeOver: cell.roles[req.session.role]?.take_over === true });
-    if (!out.ok) return res.status(409).json({ error: out.reason, holder: { username: out.holder.username, role: out.holder.role } });
+    if (out.ok === false) return res.status(409).json({ error: out.reason, holder: { username: out.holder.username, role: out.holder.role } });
     res.json(view(req));
   });
   r.post('/api/control/heartbeat', requireSession, (req, res) => {

@@ -1,5 +1,8 @@
 // The HTTP API as an OpenAPI 3.1 document (the core's paths plus each feature's), and request validation from it (ajv).
-import Ajv2020 from 'ajv/dist/2020.js';
+import Ajv2020Module from 'ajv/dist/2020.js';
+
+// ajv is CommonJS: under Node its default import is the class itself.
+const Ajv2020 = /** @type {typeof Ajv2020Module.default} */ (/** @type {unknown} */ (Ajv2020Module));
 
 const json = (schema) => ({ content: { 'application/json': { schema } } });
 const error = { type: 'object', required: ['error'], properties: { error: { type: 'string' } } };

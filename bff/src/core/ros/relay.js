@@ -18,7 +18,13 @@ export class RosRelay {
    */
   constructor({ upstreamUrl, authenticate, checkOrigin = () => true, guard, isValid = () => true,
     onClose = () => {}, recheckMs = 1000, log = () => {} }) {
-    Object.assign(this, { upstreamUrl, authenticate, checkOrigin, guard, isValid, onClose, log });
+    this.upstreamUrl = upstreamUrl;
+    this.authenticate = authenticate;
+    this.checkOrigin = checkOrigin;
+    this.guard = guard;
+    this.isValid = isValid;
+    this.onClose = onClose;
+    this.log = log;
     this.wss = new WebSocketServer({ noServer: true, maxPayload: 16 * 1024 * 1024 });
     /** @type {Map<WebSocket, ClientCtx & {session: Session}>} */
     this.clients = new Map();

@@ -69,7 +69,7 @@ export function ensureCertificates({ dataDir, hostnames, addresses, userCert, us
     key: server.keyPem, cert: server.certPem, caCertPem: ca.certPem, names,
     fingerprint: new crypto.X509Certificate(server.certPem).fingerprint256,
     caFingerprint: new crypto.X509Certificate(ca.certPem).fingerprint256,
-    source: 'generated', renewed, dir,
+    source: /** @type {const} */ ('generated'), renewed, dir,
   };
 }
 
@@ -109,7 +109,7 @@ function loadUserCertificate(certFile, keyFile, dir) {
   }
   if (!x509.checkPrivateKey(privateKey)) throw new Error(`TLS_KEY ${keyFile} does not belong to TLS_CERT ${certFile}`);
   const names = (x509.subjectAltName || '').split(', ').filter(Boolean).map((s) => s.replace(/^(DNS|IP Address):/, ''));
-  return { key, cert, caCertPem: null, names, fingerprint: x509.fingerprint256, caFingerprint: null, source: 'user', renewed: false, dir };
+  return { key, cert, caCertPem: null, names, fingerprint: x509.fingerprint256, caFingerprint: null, source: /** @type {const} */ ('user'), renewed: false, dir };
 }
 
 /** @returns {{keyPem: string, certPem: string, key: forge.pki.rsa.PrivateKey, cert: forge.pki.Certificate}|null} */

@@ -79,7 +79,7 @@ export function isLoopback(addr) {
  */
 export function httpsRedirect({ tlsPort }) {
   return (req, res, next) => {
-    if (req.socket?.encrypted || HTTP_ALLOWED_PATHS.includes(req.path)) return next();
+    if (/** @type {import('node:tls').TLSSocket} */ (req.socket)?.encrypted || HTTP_ALLOWED_PATHS.includes(req.path)) return next();
     if (isLoopback(req.socket?.remoteAddress)) return next();
     const host = hostOf(req);
     if (!host) return res.status(400).type('text/plain').send('Bad Host header\n');

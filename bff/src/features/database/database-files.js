@@ -141,6 +141,7 @@ export class DatabaseFiles {
     const dir = await this.#realInside(drive.real, subpath);
     const st = await fsp.stat(dir);
     if (!st.isDirectory()) throw new DatabaseError(400, 'not a directory');
+    /** @type {{name: string, type: 'file'|'dir', size?: number, mtime?: string, targets?: string[]}[]} */
     const entries = [];
     for (const e of await readdirOrEmpty(dir)) {
       if (e.name.startsWith('.')) continue;

@@ -15,7 +15,7 @@ export default defineFeature({
   // Names only: directories and USB roots stay on the robot PC.
   view: (section) => ({ files: section.files, max_upload_bytes: section.max_upload_bytes }),
   routes: ({ cell, env, audit, guard, log }) => databaseRoutes({
-    service: new DatabaseFiles({ cell, dataDir: env.dataDir, usbRoots: resolveUsbRoots(env.usbRoots, cell), audit }),
+    service: new DatabaseFiles({ cell: { database: cell.database }, dataDir: env.dataDir, usbRoots: resolveUsbRoots(env.usbRoots, { database: cell.database }), audit }),
     guard, log,
   }),
   openapi: databaseOpenApiPaths,

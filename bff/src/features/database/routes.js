@@ -38,16 +38,16 @@ export function databaseRoutes({ service, guard, uploadDir, log = (m) => console
   r.get('/api/database/drives/:drive/files', ...guard, handle(async (req) => {
     const p = req.query.path ?? '';
     if (typeof p !== 'string') throw new DatabaseError(400, 'invalid path');
-    return service.listDriveFiles(req.params.drive, p);
+    return service.listDriveFiles(param(req, 'drive'), p);
   }));
   r.post('/api/database/files/:name/from-drive', ...guard, json, handle(async (req) => {
     const b = body(req, 'drive', 'path');
-    return service.replaceFromDrive(req.params.name, b.drive, b.path, actor(req));
+    return service.replaceFromDrive(param(req, 'name'), b.drive, b.path, actor(req));
   }));
-  r.get('/api/database/files/:name/backups', ...guard, handle(async (req) => ({ backups: await service.listBackups(req.params.name) })));
+  r.get('/api/database/files/:name/backups', ...guard, handle(async (req) => ({ backups: await service.listBackups(param(req, 'name')) })));
   r.post('/api/database/files/:name/restore', ...guard, json, handle(async (req) => {
     const b = body(req, 'backup');
-    return service.restoreBackup(req.params.name, b.backup, actor(req));
+    return service.restoreBackup(param(req, 'name'), b.backup, actor(req));
   }));
 
   const upload = multer({
@@ -65,7 +65,7 @@ export function databaseRoutes({ service, guard, uploadDir, log = (m) => console
     let error = null;
     try {
       // Unknown targets and names are refused before anything is received.
-      await service.listBackups(req.params.name);
+      await service.listBackups(param(req, 'name'));
       if (!req.is('multipart/form-data')) throw new DatabaseError(415, 'expected multipart/form-data with a field "file"');
       const declared = Number(req.headers['content-length']);
       if (Number.isFinite(declared) && declared > service.maxBytes + 64 * 1024) throw tooLarge(service.maxBytes);
@@ -75,14 +75,14 @@ export function databaseRoutes({ service, guard, uploadDir, log = (m) => console
       await new Promise((resolve, reject) => upload(req, res, (err) => (err ? reject(err) : resolve())));
       if (!req.file) throw new DatabaseError(400, 'no file in field "file"');
       received = true;
-      result = await service.replaceFromUpload(req.params.name, req.file.path, req.file.originalname, actor(req));
+      result = await service.replaceFromUpload(param(req, 'name'), req.file.path, req.file.originalname, actor(req));
     } catch (e) {
       error = e instanceof multer.MulterError
         ? (e.code === 'LIMIT_FILE_SIZE' ? tooLarge(service.maxBytes) : new DatabaseError(400, `bad upload: ${e.message}`))
         : e;
       if (!received && error instanceof DatabaseError) {
         const a = actor(req);
-        service.audit?.record({ user: a.username, role: a.role, ip: a.ip, op: 'database.replace', target: String(req.params.name), outcome: 'denied', detail: `upload: ${error.message}` });
+        service.audit?.record({ user: a.username, role: a.role, ip: a.ip, op: 'database.replace', target: String(param(req, 'name')), outcome: 'denied', detail: `upload: ${error.message}` });
       }
     }
     // The spooled upload is gone before the answer goes out.
@@ -94,6 +94,9 @@ export function databaseRoutes({ service, guard, uploadDir, log = (m) => console
   });
   return r;
 }
+
+/** Express 5 types a path parameter as string | string[]; ours are single segments. @param {import('express').Request} req @param {string} k */
+const param = (req, k) => String(req.params[k]);
 
 const tooLarge = (max) => new DatabaseError(413, `the file is larger than the limit of ${max} bytes`);
 

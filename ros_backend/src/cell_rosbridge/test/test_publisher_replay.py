@@ -19,17 +19,24 @@ from rb_helpers import BridgeProcess, subscribers_of, wait_for
 from rb_wsclient import WSClient
 
 # A second ROS node (its own TCPROS connection) that prints what it receives, one line per message.
+# Each line is one write under a lock: print() writes the text and the newline separately, so the callback
+# thread's line and the main thread's READY could interleave.
 _ECHO = """
-import sys, rospy, std_msgs.msg as std
+import sys, threading, rospy, std_msgs.msg as std
 rospy.init_node("replay_echo", anonymous=True, disable_signals=True)
+_lock = threading.Lock()
+def say(text):
+    with _lock:
+        sys.stdout.write(text + "\\n")
+        sys.stdout.flush()
 def cb(m):
-    print(m.data, flush=True)
+    say(m.data)
 sub = rospy.Subscriber(sys.argv[1], std.String, cb, queue_size=100)
 import time
 t0 = time.monotonic()
 while sub.get_num_connections() == 0 and time.monotonic() - t0 < 15:
     time.sleep(0.01)
-print("READY", flush=True)
+say("READY")
 time.sleep(float(sys.argv[2]))
 """
 
