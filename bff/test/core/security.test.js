@@ -132,16 +132,24 @@ test('lease over HTTP: take, conflict with holder named, heartbeat, release on l
 });
 
 test('sliding renewal: a token past half its life is replaced, in the same session', async () => {
-  const s = await startBff({ SESSION_TTL_S: '2' });
+  const ttl = 3;
+  const s = await startBff({ SESSION_TTL_S: String(ttl) });
+  // JWT times are whole seconds: wait for the token's own clock, not a fixed time from the login.
+  /** @param {string} cookie */
+  const expOf = (cookie) => JSON.parse(Buffer.from(cookie.split('=')[1].split('.')[1], 'base64url').toString()).exp;
+  /** @param {number} epochS */
+  const until = (epochS) => new Promise((r) => setTimeout(r, Math.max(0, epochS * 1000 - Date.now())));
   try {
     const { cookie } = await login(s.base, 'admin', s.passwords.admin);
-    await new Promise((r) => setTimeout(r, 1100)); // the token must really age past half its 2 s life
+    const exp = expOf(cookie);
+    await until(exp - ttl / 2 + 0.05); // the token must really age past half its life
     const r = await fetch(`${s.base}/api/auth/me`, { headers: { cookie } });
     assert.equal(r.status, 200);
     const renewed = (r.headers.get('set-cookie') || '').split(';')[0];
     assert.match(renewed, /^cell_session=/);
     assert.notEqual(renewed, cookie);
-    await new Promise((r2) => setTimeout(r2, 1000));
+    assert.ok(expOf(renewed) > exp, 'the renewed token lives longer');
+    await until(exp + 0.05);
     assert.equal((await fetch(`${s.base}/api/auth/me`, { headers: { cookie } })).status, 401, 'the old token expired');
     assert.equal((await fetch(`${s.base}/api/auth/me`, { headers: { cookie: renewed } })).status, 200, 'the renewed one lives on');
   } finally {
