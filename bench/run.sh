@@ -9,3 +9,5 @@ python bench/rosbridge_bench.py
 echo; echo "== BFF relay path =="
 node bench/bff_relay_bench.mjs
 if [[ -f bench/sim_bench.py ]]; then echo; echo "== simulated cell =="; python bench/sim_bench.py; fi
+echo; echo "== manual motion: hold-to-run jog through the page =="
+node bench/manual_bench.mjs

@@ -36,7 +36,7 @@ def parse_args(argv: Optional[list[str]] = None) -> CellOptions:
     ap.add_argument("--speed", type=float, default=1.0, help="real-time factor (e.g. 4 for tests)")
     ap.add_argument("--camera-size", type=parse_size, default=(640, 480))
     ap.add_argument("--camera-rate", type=float, default=15.0, help="frames per second per camera")
-    ap.add_argument("--sensor-rate", type=float, default=50.0, help="F/T, tactile and joint_states rate (Hz)")
+    ap.add_argument("--sensor-rate", type=float, default=50.0, help="F/T and tactile rate (Hz)")
     ap.add_argument("--no-cameras", action="store_true")
     ap.add_argument("--no-ros", action="store_true")
     ap.add_argument("--power-off", action="store_true",

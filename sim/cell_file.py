@@ -27,8 +27,9 @@ from .cameras import VIEWS
 REPO_ROOT = Path(__file__).resolve().parents[1]
 WRENCH_TYPE = "geometry_msgs/WrenchStamped"
 TACTILE_TYPE = "cell_msgs/Scatter"
-# Topics the sim publishes whatever the cell says: a device declared there would clash with them.
-RESERVED_TOPICS = ("/joint_states", "/sim/faults")
+# Topics the sim publishes whatever the cell says: a device declared there would clash with them. (/joint_states
+# is not the sim's: the robot driver publishes it from RTDE, as it would for a real UR.)
+RESERVED_TOPICS = ("/sim/faults",)
 # What rospy accepts as a global name (rosgraph.names.is_legal_name, anchored): a bad one must not
 # surface as a ValueError from rospy.Publisher deep inside the bridge.
 _TOPIC = re.compile(r"/[A-Za-z][\w/]*", re.ASCII)

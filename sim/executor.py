@@ -199,9 +199,16 @@ class ControlScriptProgram:
                 c.arm.start(self.speed)
             self.speed.set_target(np.array(vals[:6]), vals[6])
         elif cmd == SPEED_STOP:
+            # Like the script: stopj(a) after speedJ, stopl(a) after speedL (a also limits the rotation), with the
+            # client's deceleration a (ur_rtde's speedStop(a=10.0)).
             if self.speed is not None:
+                decel = self._in_f(c, 0)[0] or 10.0
+                lead = None
+                if isinstance(self.speed, motion.SpeedL):
+                    twist = kin.jacobian(c.arm.q_set, c.tcp) @ c.arm.qd_set
+                    lead = max(float(np.linalg.norm(twist[:3])), float(np.linalg.norm(twist[3:])))
                 self.speed = None
-                c.arm.stop(10.0)
+                c.arm.stop(decel, lead)
         elif cmd == SERVOJ:
             vals = self._in_f(c, 0, 11)
             if self.servo is None or c.arm.motion is not self.servo:

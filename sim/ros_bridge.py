@@ -3,9 +3,10 @@
 The device topics are the ones the cell file declares (sim/cell_file.py): the wrist F/T reading on every
 WrenchStamped sensor topic and the tactile pad on every Scatter sensor topic (sensor rate), one
 sensor_msgs/CompressedImage camera per video stream (camera rate, only while the topic has a subscriber).
-Fixed names: /joint_states (sensor rate), /sim/faults (latched cell_msgs/AlarmList: the devices' fault state,
-for the cell's alarms feature to turn into alarms; the sim publishes no alarm list itself), and the service
-/sim/trigger_fault (cell_msgs/TriggerFault).
+Fixed names: /sim/faults (latched cell_msgs/AlarmList: the devices' fault state, for the cell's alarms feature to
+turn into alarms; the sim publishes no alarm list itself) and the service /sim/trigger_fault (cell_msgs/TriggerFault).
+No /joint_states: the arm is a UR controller, which speaks RTDE, not ROS; the cell's robot driver
+(cell_nodes manual_node) reads it over RTDE and is the only source of /joint_states, as with a real robot.
 """
 from __future__ import annotations
 
@@ -17,7 +18,6 @@ from .cell_file import CellDevices, Stream
 from .controller import Controller
 from .pacing import Pacer
 from .safety import Fault
-from .urdf import ARM_JOINTS, FINGER_JOINTS
 
 log = logging.getLogger("sim.ros")
 
@@ -38,7 +38,7 @@ class RosBridge:
         from cell_msgs.msg import AlarmList, Scatter
         from cell_msgs.srv import TriggerFault
         from geometry_msgs.msg import WrenchStamped
-        from sensor_msgs.msg import CompressedImage, JointState
+        from sensor_msgs.msg import CompressedImage
 
         self.rospy = rospy
         self.ctl = controller
@@ -54,7 +54,6 @@ class RosBridge:
             if h not in logging.root.handlers:
                 logging.root.addHandler(h)
         logging.root.setLevel(root_level)
-        self.pub_joints = rospy.Publisher("/joint_states", JointState, queue_size=10)
         self.pub_wrench = [rospy.Publisher(t, WrenchStamped, queue_size=10) for t in devices.wrench_topics]
         self.pub_tactile = [rospy.Publisher(t, Scatter, queue_size=10) for t in devices.tactile_topics]
         # Latched: a node that starts later still learns which faults are active right now.
@@ -64,7 +63,7 @@ class RosBridge:
         for s in devices.streams:
             log.info("camera %r on %s shows the %s view", s.name, s.topic, s.view)
         self._types = dict(AlarmList=AlarmList, Scatter=Scatter, WrenchStamped=WrenchStamped,
-                           JointState=JointState, CompressedImage=CompressedImage)
+                           CompressedImage=CompressedImage)
         self.service = rospy.Service("/sim/trigger_fault", TriggerFault, self._trigger_fault)
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
@@ -95,13 +94,6 @@ class RosBridge:
     def _publish_sensors(self) -> None:
         snap = self.ctl.snapshot
         stamp = self.rospy.Time.now()
-        js = self._types["JointState"]()
-        js.header.stamp = stamp
-        js.name = ARM_JOINTS + FINGER_JOINTS
-        js.position = list(snap.actual_q) + list(snap.finger_q)
-        js.velocity = list(snap.actual_qd) + [0.0, 0.0]
-        js.effort = list(snap.actual_current * 10.0) + [0.0, 0.0]
-        self.pub_joints.publish(js)
         if self.pub_wrench:
             w = self._types["WrenchStamped"]()
             w.header.stamp = stamp

@@ -1,5 +1,6 @@
 // UI steps shared by the specs (data-testid contract of app/).
 import { expect } from '@playwright/test';
+import { WebSocket } from 'ws';
 
 export const users = () => JSON.parse(process.env.E2E_USERS);
 
@@ -25,4 +26,18 @@ export async function openMenu(page) {
 /** @param {import('@playwright/test').BrowserContext} context */
 export async function sessionCookie(context) {
   return (await context.cookies()).find((c) => c.name === 'cell_session');
+}
+
+/** A rosbridge client on /ros with the browser's session cookie. */
+export async function rosSocket(baseURL, cookie) {
+  const ws = new WebSocket(`${baseURL.replace('http', 'ws')}/ros`, { headers: { cookie: `cell_session=${cookie.value}` } });
+  const inbox = [];
+  ws.on('message', (d) => inbox.push(JSON.parse(d.toString())));
+  await new Promise((resolve, reject) => { ws.once('open', resolve); ws.once('error', reject); });
+  const send = (m) => ws.send(JSON.stringify(m));
+  const waitFor = async (pred) => {
+    await expect.poll(() => inbox.find(pred), { timeout: 10_000 }).toBeTruthy();
+    return inbox.find(pred);
+  };
+  return { ws, inbox, send, waitFor };
 }

@@ -4,13 +4,13 @@ export default async function globalSetup() {
   const port = Number(process.env.E2E_PORT || 18080);
   const env = stackEnv({
     port, masterPort: port + 1, rosbridgePort: port + 2,
-    // The shell tests need no robot; the simulated cell's own tests run it.
-    extraEnv: { UR_SIM: '0' },
+    // The simulated cell runs as under `npm start` (the manual-motion tests drive it through the real driver).
   });
   const users = { admin: 'admin-e2e-password', operator: 'operator-e2e-password' };
   for (const [name, pw] of Object.entries(users)) addUser(env, name, name, pw);
   const stack = await startStack(env);
   process.env.E2E_ROS_MASTER_URI = env.ROS_MASTER_URI;
+  process.env.E2E_ROSBRIDGE_URL = `ws://127.0.0.1:${env.ROSBRIDGE_PORT}`;
   process.env.E2E_USERS = JSON.stringify(users);
   globalThis.__cellStack = stack;
 }

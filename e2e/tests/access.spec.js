@@ -2,24 +2,9 @@
 // errors and never reach ROS; the admin pages' APIs are refused too. Runs on the phone profile only (see playwright.config.js), as an
 // operator on the shop floor would be.
 import { test, expect } from '@playwright/test';
-import { WebSocket } from 'ws';
-import { loginAs, sessionCookie } from '../lib/app.js';
+import { loginAs, sessionCookie, rosSocket } from '../lib/app.js';
 import { rosCli, publishMode } from '../lib/ros.js';
 
-
-/** A rosbridge client on /ros with the browser's session cookie. */
-async function rosSocket(baseURL, cookie) {
-  const ws = new WebSocket(`${baseURL.replace('http', 'ws')}/ros`, { headers: { cookie: `cell_session=${cookie.value}` } });
-  const inbox = [];
-  ws.on('message', (d) => inbox.push(JSON.parse(d.toString())));
-  await new Promise((resolve, reject) => { ws.once('open', resolve); ws.once('error', reject); });
-  const send = (m) => ws.send(JSON.stringify(m));
-  const waitFor = async (pred) => {
-    await expect.poll(() => inbox.find(pred), { timeout: 10_000 }).toBeTruthy();
-    return inbox.find(pred);
-  };
-  return { ws, inbox, send, waitFor };
-}
 
 test('an operator cannot publish, advertise, call forbidden services or subscribe outside the grant', async ({ page, context, baseURL }) => {
   await publishMode('idle');

@@ -126,7 +126,7 @@ test('npm start runs the simulated cell by default, at UR_HOST, and stops it wit
     s.once('error', reject);
   });
   assert.match(greeting, /Universal Robots Dashboard Server/);
-  // ...and the simulated cell publishes joint states on the stack's ROS master.
+  // ...and the robot driver (features/manual.launch) reads it over RTDE and publishes joint states on the stack's master.
   const { execFile } = await import('node:child_process');
   const out = await new Promise((resolve, reject) => execFile('bash', ['-c', 'source scripts/ros-env.sh && rostopic echo -n 1 /joint_states/name'],
     { cwd: REPO_ROOT, env, timeout: 60_000 }, (e, stdout) => (e ? reject(e) : resolve(stdout))));

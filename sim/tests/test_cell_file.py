@@ -112,7 +112,7 @@ WRENCH = "geometry_msgs/WrenchStamped"
     ({"sensors": [{"type": WRENCH, "topic": "/a"}, {"type": "cell_msgs/Scatter", "topic": "/a"}]},
      "tactile sensor: /a is already used by a wrench sensor"),
     ({"sensors": [{"type": WRENCH, "topic": "/a"}], "video": {"streams": [{"topic": "/a"}]}}, "video stream: /a"),
-    ({"sensors": [{"type": WRENCH, "topic": "/joint_states"}]}, "already used by the sim itself"),
+    ({"sensors": [{"type": WRENCH, "topic": "/sim/faults"}]}, "already used by the sim itself"),
 ])
 def test_unusable_sections_name_the_field(doc, where) -> None:
     if where is None:

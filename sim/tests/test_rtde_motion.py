@@ -121,6 +121,23 @@ def test_speedj_moves_at_commanded_velocity(robot):
     wait_for(lambda: max(abs(v) for v in r.getActualQd()) < 1e-3, 5, what="speedStop")
 
 
+def test_speed_stop_uses_the_clients_deceleration(robot):
+    """speedStop(a) decelerates at a (the script's stopj(a)/stopl(a)): a firm stop is quicker than a soft one."""
+    c, r = robot
+
+    def stop_time(a: float) -> float:
+        c.speedJ([0.5, 0, 0, 0, 0, 0], 5.0, 0.002)
+        wait_for(lambda: abs(r.getActualQd()[0] - 0.5) < 0.01, 5, what="speedJ velocity")
+        t0 = r.getTimestamp()  # controller time
+        c.speedStop(a)
+        wait_for(lambda: abs(r.getActualQd()[0]) < 0.01, 5, interval=0.001, what="standstill")
+        return r.getTimestamp() - t0
+
+    soft, firm = stop_time(1.0), stop_time(20.0)
+    assert 0.35 < soft < 0.7, f"0.5 rad/s at 1 rad/s^2 should take ~0.5 s, took {soft:.3f} s"
+    assert firm < 0.1, f"0.5 rad/s at 20 rad/s^2 should take ~0.025 s, took {firm:.3f} s"
+
+
 def test_speedl_moves_tcp_along_x(robot):
     c, r = robot
     p0 = np.array(r.getActualTCPPose())

@@ -4,9 +4,10 @@ import { menuPages, routeAccess, safeNext, featureByPath, pageTitle } from '../.
 import { features } from '../../src/lib/features/index.js';
 
 describe('routing from the feature list', () => {
-  it('knows home and system with their paths', () => {
+  it('knows home, manual and system with their paths', () => {
     expect(features.map((p) => [p.id, p.path])).toEqual([
       ['home', '/'],
+      ['manual', '/manual'],
       ['system', '/system'],
     ]);
     expect(featureByPath('/system/')?.id).toBe('system');

@@ -8,6 +8,7 @@
  * the cell file's title wins over `title` here.
  */
 import homeIcon from './home/icon.js';
+import manualIcon from './manual/icon.js';
 import systemIcon from './system/icon.js';
 
 /** SVG path data (24x24, stroked) or a small component taking `size`. @typedef {string | import('svelte').Component<{ size?: number }>} IconSpec */
@@ -31,5 +32,6 @@ import systemIcon from './system/icon.js';
 /** @type {FeatureEntry[]} */
 export const features = [
   { id: 'home', path: '/', title: 'Home', icon: homeIcon, load: () => import('./home/Page.svelte') },
+  { id: 'manual', path: '/manual', title: 'Manual motion', icon: manualIcon, load: () => import('./manual/Page.svelte') },
   { id: 'system', path: '/system', title: 'System', icon: systemIcon, load: () => import('./system/Page.svelte') },
 ];

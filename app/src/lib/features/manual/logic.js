@@ -1,0 +1,586 @@
+/**
+ * Manual motion's plain logic (no Svelte, no ROS): units, the driver's answers, service requests, what the
+ * page shows, when its motion controls may be used, and the hold-to-run jog heartbeat.
+ *
+ * The ROS side speaks m, rad, s (the contract: /tmp spec "Manual motion", cell_msgs). The page speaks what a
+ * UR pendant user reads: positions in mm, TCP rotations in rad (a rotation vector, as PolyScope shows it),
+ * joints in degrees, relative rotations in degrees, speeds as a fraction of the driver's limits.
+ */
+import { commandGate } from '../../core/gate.js';
+
+export const FEATURE_ID = 'manual';
+
+/** ROS names of the driver (/cell/manual/...). */
+export const NAMES = Object.freeze({
+  state: { topic: '/cell/manual/state', type: 'cell_msgs/RobotState' },
+  jog: { topic: '/cell/manual/jog', type: 'cell_msgs/JogCommand' },
+  groups: { service: '/cell/manual/groups', type: 'cell_msgs/GetMotionGroups' },
+  getPose: { service: '/cell/manual/get_pose', type: 'cell_msgs/GetPose' },
+  moveNamed: { service: '/cell/manual/move_named', type: 'cell_msgs/MoveNamed' },
+  moveRelative: { service: '/cell/manual/move_relative', type: 'cell_msgs/MoveRelative' },
+  movePose: { service: '/cell/manual/move_pose', type: 'cell_msgs/MovePose' },
+  tool: { service: '/cell/manual/tool', type: 'cell_msgs/ToolAction' },
+  stop: { service: '/cell/manual/stop', type: 'std_srvs/Trigger' },
+});
+
+/** The jog heartbeat: the driver stops ~200 ms after the last JogCommand, so 50 ms leaves room for 3 misses. */
+export const JOG_PERIOD_MS = 50;
+/** The state topic comes at 20 Hz: older than this and it is stale. */
+export const STATE_STALE_MS = 1000;
+/** ISO 10218-1 reduced speed: manual TCP speed never above 250 mm/s (the driver clamps to it too). */
+export const MAX_MANUAL_TCP_SPEED = 0.25;
+/** Slider floor: a 0 would mean "the driver's default" in the move services, not "slow". */
+export const MIN_FRACTION = 0.01;
+/** Service moves block until the arm arrives: wait long, "Stop move" ends them sooner. */
+export const MOVE_TIMEOUT_MS = 180_000;
+
+export const CART_AXES = /** @type {const} */ (['X', 'Y', 'Z', 'RX', 'RY', 'RZ']);
+
+// ---- units ----
+
+/** @param {number} mm */
+export const mmToM = (mm) => mm / 1000;
+/** @param {number} m */
+export const mToMm = (m) => m * 1000;
+/** @param {number} deg */
+export const degToRad = (deg) => (deg * Math.PI) / 180;
+/** @param {number} rad */
+export const radToDeg = (rad) => (rad * 180) / Math.PI;
+
+/** @param {number} v @param {number} lo @param {number} hi */
+export const clamp = (v, lo, hi) => Math.min(hi, Math.max(lo, v));
+
+/**
+ * A number typed on a shop-floor keyboard: "12.5", "-3", "1,5" (decimal comma), surrounding spaces.
+ * @param {unknown} text
+ * @returns {number | null}  null when empty or not a finite number
+ */
+export function parseNumber(text) {
+  if (typeof text === 'number') return Number.isFinite(text) ? text : null;
+  if (typeof text !== 'string') return null;
+  const t = text.trim().replace(',', '.');
+  if (t === '' || !/^[-+]?(\d+\.?\d*|\.\d+)(e[-+]?\d+)?$/i.test(t)) return null;
+  const v = Number(t);
+  return Number.isFinite(v) ? v : null;
+}
+
+/**
+ * @param {unknown} v @param {number} digits
+ * @returns {string}  '—' for anything that is not a finite number; never "-0.0"
+ */
+export function fixed(v, digits) {
+  if (typeof v !== 'number' || !Number.isFinite(v)) return '—';
+  const s = v.toFixed(digits);
+  return /^-0\.?0*$/.test(s) ? s.slice(1) : s;
+}
+
+// ---- the driver's answer to /cell/manual/groups ----
+
+/**
+ * @typedef {object} Limits  the driver's manual limits (ManualLimits), SI units
+ * @property {number} defaultSpeed         rad/s
+ * @property {number} defaultAcceleration  rad/s^2
+ * @property {number} maxSpeed             rad/s (joint moves, joint jog, Cartesian rotation jog)
+ * @property {number} maxAcceleration      rad/s^2
+ * @property {number} maxTcpSpeed          m/s, never above 0.25
+ * @property {number} maxTcpAcceleration   m/s^2
+ * @property {number} jogTimeout           s
+ */
+/** @typedef {{ name: string, positions: number[] }} NamedConfiguration */
+/** @typedef {{ name: string, joints: string[], configurations: NamedConfiguration[] }} MotionGroup */
+/** @typedef {{ name: string, actions: string[] }} ToolInfo */
+/** @typedef {{ groups: MotionGroup[], tools: ToolInfo[], limits: Limits }} DriverSetup */
+
+/** @param {unknown} v */
+const num = (v) => (typeof v === 'number' && Number.isFinite(v) && v > 0 ? v : 0);
+/** @param {unknown} v @returns {string[]} */
+const strings = (v) => (Array.isArray(v) ? v.filter((s) => typeof s === 'string') : []);
+
+/** @param {any} l @returns {Limits} */
+export function normalizeLimits(l) {
+  const maxTcp = num(l?.max_tcp_speed);
+  return {
+    defaultSpeed: num(l?.default_speed),
+    defaultAcceleration: num(l?.default_acceleration),
+    maxSpeed: num(l?.max_speed),
+    maxAcceleration: num(l?.max_acceleration),
+    // The cap holds whatever the driver says (ISO 10218-1 reduced speed).
+    maxTcpSpeed: maxTcp ? Math.min(maxTcp, MAX_MANUAL_TCP_SPEED) : MAX_MANUAL_TCP_SPEED,
+    maxTcpAcceleration: num(l?.max_tcp_acceleration),
+    jogTimeout: num(l?.jog_timeout),
+  };
+}
+
+/**
+ * cell_msgs/GetMotionGroups response -> what the page uses (unnamed entries dropped).
+ * @param {any} resp
+ * @returns {DriverSetup}
+ */
+export function normalizeSetup(resp) {
+  const groups = (Array.isArray(resp?.groups) ? resp.groups : [])
+    .filter((/** @type {any} */ g) => typeof g?.name === 'string' && g.name)
+    .map((/** @type {any} */ g) => ({
+      name: g.name,
+      joints: strings(g.joints),
+      configurations: (Array.isArray(g.configurations) ? g.configurations : [])
+        .filter((/** @type {any} */ c) => typeof c?.name === 'string' && c.name)
+        .map((/** @type {any} */ c) => ({ name: c.name, positions: Array.isArray(c.positions) ? c.positions.map(Number) : [] })),
+    }));
+  const tools = (Array.isArray(resp?.tools) ? resp.tools : [])
+    .filter((/** @type {any} */ t) => typeof t?.name === 'string' && t.name)
+    .map((/** @type {any} */ t) => ({ name: t.name, actions: strings(t.actions) }));
+  return { groups, tools, limits: normalizeLimits(resp?.limits) };
+}
+
+// ---- names ----
+
+/** "gripper" -> "Gripper", "tool_changer" -> "Tool changer". @param {string} s */
+export function humanize(s) {
+  const t = String(s ?? '').replace(/[_-]+/g, ' ').trim();
+  return t ? t[0].toUpperCase() + t.slice(1) : '';
+}
+
+/** The tool button's name: "Gripper open". @param {string} tool @param {string} action */
+export function toolLabel(tool, action) {
+  return `${humanize(tool)} ${String(action ?? '').replace(/[_-]+/g, ' ')}`.trim();
+}
+
+/**
+ * The jog button's accessible name: "Jog joint 1 +" (1-based) or "Jog X -".
+ * @param {'joint' | 'cartesian'} mode @param {number} axis  0-based @param {1 | -1} direction
+ */
+export function jogLabel(mode, axis, direction) {
+  const sign = direction > 0 ? '+' : '-';
+  return mode === 'joint' ? `Jog joint ${axis + 1} ${sign}` : `Jog ${CART_AXES[axis]} ${sign}`;
+}
+
+/**
+ * The rows of the jog pad: one per joint of the group (joint mode) or per Cartesian axis.
+ * @param {'joint' | 'cartesian'} mode
+ * @param {string[]} joints  the group's joint names
+ * @returns {{ axis: number, name: string, detail: string }[]}
+ */
+export function jogRows(mode, joints) {
+  if (mode === 'cartesian') {
+    return CART_AXES.map((a, axis) => ({ axis, name: a, detail: axis < 3 ? 'mm' : 'rad' }));
+  }
+  return joints.map((j, axis) => ({ axis, name: `J${axis + 1}`, detail: jointShortName(j) }));
+}
+
+/** "shoulder_pan_joint" -> "shoulder pan". @param {string} name */
+export function jointShortName(name) {
+  return String(name ?? '').replace(/_joint$/, '').replace(/_/g, ' ');
+}
+
+// ---- speeds ----
+
+/**
+ * The fraction a speed slider starts at: the driver's default over its maximum.
+ * @param {number} def @param {number} max @param {number} [fallback]
+ */
+export function defaultFraction(def, max, fallback = 0.25) {
+  if (!(max > 0) || !(def > 0)) return fallback;
+  return clamp(def / max, MIN_FRACTION, 1);
+}
+
+/**
+ * What a jog at `fraction` of the manual maximum runs at (the driver's rule).
+ * @param {number} fraction @param {Limits} limits
+ * @returns {{ mmPerS: number, radPerS: number }}  TCP linear speed, joint / TCP rotation speed
+ */
+export function jogRates(fraction, limits) {
+  const f = clamp(fraction, 0, 1);
+  return { mmPerS: mToMm(f * limits.maxTcpSpeed), radPerS: f * limits.maxSpeed };
+}
+
+/**
+ * Speed and acceleration of a service move at the slider fractions: joint moves in rad/s and rad/s^2,
+ * Cartesian moves in m/s and m/s^2. A limit the driver did not report gives 0 (= the driver's default).
+ * @param {number} speedFraction @param {number} accFraction @param {Limits} limits
+ */
+export function moveRates(speedFraction, accFraction, limits) {
+  const s = clamp(speedFraction, MIN_FRACTION, 1);
+  const a = clamp(accFraction, MIN_FRACTION, 1);
+  return {
+    joint: { speed: s * limits.maxSpeed, acceleration: a * limits.maxAcceleration },
+    tcp: { speed: s * limits.maxTcpSpeed, acceleration: a * limits.maxTcpAcceleration },
+  };
+}
+
+// ---- messages and requests ----
+
+/**
+ * cell_msgs/JogCommand.
+ * @param {{ group: string, mode: 'joint' | 'cartesian', axis: number, direction: number, fraction: number, frame: 'base' | 'tool' }} o
+ */
+export function jogCommand({ group, mode, axis, direction, fraction, frame }) {
+  return {
+    group,
+    mode,
+    axis: Math.max(0, Math.trunc(axis)),
+    direction: direction > 0 ? 1 : direction < 0 ? -1 : 0,
+    speed: clamp(fraction, MIN_FRACTION, 1),
+    frame: frame === 'tool' ? 'tool' : 'base',
+  };
+}
+
+/** @typedef {{ ok: true, request: any } | { ok: false, error: string }} Built */
+
+/**
+ * cell_msgs/MoveNamed request.
+ * @param {string} group @param {string} name @param {{ speed: number, acceleration: number }} rates  rad/s, rad/s^2
+ * @returns {Built}
+ */
+export function namedRequest(group, name, rates) {
+  if (!group) return { ok: false, error: 'Choose a motion group' };
+  if (!name) return { ok: false, error: 'Choose a named configuration' };
+  return { ok: true, request: { group, name, speed: rates.speed, acceleration: rates.acceleration } };
+}
+
+/** @typedef {{ dx: string, dy: string, dz: string, drx: string, dry: string, drz: string }} RelativeForm  mm and degrees */
+/** @typedef {{ x: string, y: string, z: string, rx: string, ry: string, rz: string }} PoseForm  mm and rad */
+
+/**
+ * cell_msgs/MoveRelative request from the form (dx, dy, dz in mm; drx, dry, drz in degrees, a rotation
+ * vector, as a UR pose offset). Empty fields count as 0; an all-zero offset is refused (nothing to do).
+ * @param {string} group @param {RelativeForm} form @param {'base' | 'tool'} frame
+ * @param {{ speed: number, acceleration: number }} rates  m/s, m/s^2
+ * @returns {Built}
+ */
+export function relativeRequest(group, form, frame, rates) {
+  if (!group) return { ok: false, error: 'Choose a motion group' };
+  const keys = /** @type {const} */ (['dx', 'dy', 'dz', 'drx', 'dry', 'drz']);
+  /** @type {number[]} */
+  const v = [];
+  for (const k of keys) {
+    const raw = form[k];
+    const n = raw === undefined || String(raw).trim() === '' ? 0 : parseNumber(raw);
+    if (n === null) return { ok: false, error: `${k} is not a number` };
+    v.push(n);
+  }
+  if (v.every((n) => n === 0)) return { ok: false, error: 'Enter an offset first (all fields are 0)' };
+  const offset = [mmToM(v[0]), mmToM(v[1]), mmToM(v[2]), degToRad(v[3]), degToRad(v[4]), degToRad(v[5])];
+  return { ok: true, request: { group, offset, frame: frame === 'tool' ? 'tool' : 'base', speed: rates.speed, acceleration: rates.acceleration } };
+}
+
+/**
+ * cell_msgs/MovePose request from the form (x, y, z in mm; rx, ry, rz in rad, base frame). Every field is needed.
+ * @param {string} group @param {PoseForm} form @param {{ speed: number, acceleration: number }} rates  m/s, m/s^2
+ * @returns {Built}
+ */
+export function poseRequest(group, form, rates) {
+  if (!group) return { ok: false, error: 'Choose a motion group' };
+  const keys = /** @type {const} */ (['x', 'y', 'z', 'rx', 'ry', 'rz']);
+  /** @type {number[]} */
+  const v = [];
+  for (const k of keys) {
+    const n = parseNumber(form[k]);
+    if (n === null) return { ok: false, error: `Enter ${k} (a number), or press "Use current pose"` };
+    v.push(n);
+  }
+  const pose = [mmToM(v[0]), mmToM(v[1]), mmToM(v[2]), v[3], v[4], v[5]];
+  return { ok: true, request: { group, pose, speed: rates.speed, acceleration: rates.acceleration } };
+}
+
+/**
+ * The absolute-pose form filled from a TCP pose (m, rotation vector rad).
+ * @param {unknown} tcpPose
+ * @returns {PoseForm | null}
+ */
+export function poseToForm(tcpPose) {
+  if (!isPose(tcpPose)) return null;
+  const p = /** @type {number[]} */ (tcpPose);
+  return { x: fixed(mToMm(p[0]), 2), y: fixed(mToMm(p[1]), 2), z: fixed(mToMm(p[2]), 2), rx: fixed(p[3], 4), ry: fixed(p[4], 4), rz: fixed(p[5], 4) };
+}
+
+/** @param {unknown} p @returns {boolean} */
+export function isPose(p) {
+  return Array.isArray(p) && p.length >= 6 && p.slice(0, 6).every((v) => typeof v === 'number' && Number.isFinite(v));
+}
+
+// ---- what the page shows ----
+
+/**
+ * The TCP pose as the pendant shows it: X, Y, Z in mm and RX, RY, RZ in rad (a rotation vector, no quaternion).
+ * @param {unknown} tcpPose
+ * @returns {{ label: string, value: string, unit: string }[]}
+ */
+export function poseRows(tcpPose) {
+  const p = isPose(tcpPose) ? /** @type {number[]} */ (tcpPose) : null;
+  return CART_AXES.map((label, i) => ({
+    label,
+    value: p ? (i < 3 ? fixed(mToMm(p[i]), 1) : fixed(p[i], 4)) : '—',
+    unit: i < 3 ? 'mm' : 'rad',
+  }));
+}
+
+/**
+ * Joint positions in degrees, named after the group's joints when they match.
+ * @param {unknown} positions  rad
+ * @param {string[]} [names]
+ * @returns {{ label: string, name: string, value: string }[]}
+ */
+export function jointRows(positions, names = []) {
+  const q = Array.isArray(positions) ? positions : [];
+  const n = Math.max(q.length, names.length);
+  return Array.from({ length: n }, (_, i) => ({
+    label: `J${i + 1}`,
+    name: names[i] ? jointShortName(names[i]) : '',
+    value: typeof q[i] === 'number' ? fixed(radToDeg(q[i]), 2) : '—',
+  }));
+}
+
+/** @typedef {'ok' | 'warn' | 'danger' | 'neutral' | 'info'} Tone */
+
+/** "POWER_OFF" -> "Power off". @param {string} s */
+export function modeText(s) {
+  if (!s) return 'unknown';
+  const t = s.toLowerCase().replace(/_/g, ' ');
+  return t[0].toUpperCase() + t.slice(1);
+}
+
+/** @param {string} m  UR robot mode name @returns {Tone} */
+export function robotModeTone(m) {
+  if (m === 'RUNNING') return 'ok';
+  if (['IDLE', 'POWER_ON', 'BOOTING', 'POWER_OFF', 'BACKDRIVE', 'CONFIRM_SAFETY', 'UPDATING_FIRMWARE'].includes(m)) return 'warn';
+  if (!m) return 'neutral';
+  return 'danger';
+}
+
+/** @param {string} m  UR safety mode name @returns {Tone} */
+export function safetyTone(m) {
+  if (m === 'NORMAL') return 'ok';
+  if (m === 'REDUCED' || m === 'RECOVERY') return 'warn';
+  if (!m) return 'neutral';
+  return 'danger';
+}
+
+/**
+ * @typedef {object} RobotState  cell_msgs/RobotState as received (the fields the page uses)
+ * @property {boolean} connected
+ * @property {string} controller
+ * @property {string} robot_mode
+ * @property {string} safety_mode
+ * @property {number} speed_scaling
+ * @property {boolean} program_running
+ * @property {string} motion
+ * @property {string} motion_group
+ * @property {string} motion_target
+ * @property {number} progress
+ * @property {string} message
+ * @property {number[]} joint_positions
+ * @property {number[]} tcp_pose
+ * @property {number[]} tcp_speed
+ */
+
+/**
+ * Keep only the fields the page shows (what is stored as the last known state).
+ * @param {any} msg
+ * @returns {RobotState}
+ */
+export function pickState(msg) {
+  const nums = (/** @type {any} */ a) => (Array.isArray(a) ? a.map(Number) : []);
+  const str = (/** @type {any} */ s) => (typeof s === 'string' ? s : '');
+  return {
+    connected: msg?.connected === true,
+    controller: str(msg?.controller),
+    robot_mode: str(msg?.robot_mode),
+    safety_mode: str(msg?.safety_mode),
+    speed_scaling: typeof msg?.speed_scaling === 'number' ? msg.speed_scaling : 0,
+    program_running: msg?.program_running === true,
+    motion: str(msg?.motion) || 'idle',
+    motion_group: str(msg?.motion_group),
+    motion_target: str(msg?.motion_target),
+    progress: typeof msg?.progress === 'number' ? clamp(msg.progress, 0, 1) : 1,
+    message: str(msg?.message),
+    joint_positions: nums(msg?.joint_positions),
+    tcp_pose: nums(msg?.tcp_pose),
+    tcp_speed: nums(msg?.tcp_speed),
+  };
+}
+
+/**
+ * The status strip, in words (colour is never the only signal).
+ * @param {RobotState | null} s
+ */
+export function statusView(s) {
+  if (!s) {
+    return {
+      known: false,
+      driver: { text: 'no state from the robot driver yet', tone: /** @type {Tone} */ ('neutral') },
+      robot: { text: 'unknown', tone: /** @type {Tone} */ ('neutral') },
+      safety: { text: 'unknown', tone: /** @type {Tone} */ ('neutral') },
+      motion: { text: 'unknown', moving: false, progress: 1 },
+      message: '',
+    };
+  }
+  const moving = s.motion !== 'idle' && s.motion !== '';
+  const target = s.motion_target ? ` ${s.motion_target}` : '';
+  const motionText = !moving
+    ? 'idle'
+    : s.motion === 'moving'
+      ? `moving to${target}`
+      : s.motion === 'tool'
+        ? `tool action${target}`
+        : s.motion === 'jogging'
+          ? `jogging${s.motion_group ? ` ${s.motion_group}` : ''}`
+          : s.motion;
+  return {
+    known: true,
+    driver: s.connected
+      ? { text: `connected${s.controller ? ` to ${s.controller}` : ''}`, tone: /** @type {Tone} */ ('ok') }
+      : { text: `unreachable${s.controller ? ` (${s.controller})` : ''}`, tone: /** @type {Tone} */ ('danger') },
+    robot: { text: s.connected ? modeText(s.robot_mode) : 'unknown', tone: s.connected ? robotModeTone(s.robot_mode) : /** @type {Tone} */ ('neutral') },
+    safety: { text: s.connected ? modeText(s.safety_mode) : 'unknown', tone: s.connected ? safetyTone(s.safety_mode) : /** @type {Tone} */ ('neutral') },
+    motion: { text: motionText, moving, progress: s.progress },
+    message: s.message,
+  };
+}
+
+/** "robot controller at 10.0.0.2 is unreachable" -> "Robot controller at 10.0.0.2 is unreachable". @param {string} s */
+const sentence = (s) => (s ? s[0].toUpperCase() + s.slice(1) : s);
+
+/** The manual page's wording for a role without the command grant (the e2e tests look for "role may not"). */
+export const VIEW_ONLY_REASON = 'View only: your role may not move the robot';
+
+/**
+ * May the page's motion controls (jog, moves, tool actions) be used now, and if not, why (in words).
+ * Order: what the user cannot fix here first (offline, ROS down, the role), then the robot controller,
+ * then the lease (which the user can take).
+ * @param {object} o
+ * @param {boolean} o.offline
+ * @param {'connecting' | 'connected' | 'disconnected'} o.conn
+ * @param {string[] | undefined} o.commands  /api/config `commands`
+ * @param {boolean} o.holdsLease
+ * @param {RobotState | null} [o.driver]  the live driver state (null: none yet, not checked)
+ * @param {boolean} [o.busy]  a move from this page is running
+ * @returns {import('../../core/gate.js').Gate}
+ */
+export function manualGate({ offline, conn, commands, holdsLease, driver = null, busy = false }) {
+  const link = commandGate({ offline, conn });
+  if (!link.ok) return link;
+  if (Array.isArray(commands) && !commands.includes(FEATURE_ID)) return { ok: false, reason: VIEW_ONLY_REASON };
+  if (driver && !driver.connected) {
+    return { ok: false, reason: sentence(driver.message) || `Robot controller${driver.controller ? ` at ${driver.controller}` : ''} is unreachable` };
+  }
+  const lease = commandGate({ offline: false, needsLease: true, holdsLease });
+  if (!lease.ok) return lease;
+  if (busy) return { ok: false, reason: 'A move is running: wait for it or press "Stop move"' };
+  return { ok: true, reason: '' };
+}
+
+/**
+ * Why the page does not show live data, if it does not.
+ * @param {{ offline: boolean, conn: 'connecting' | 'connected' | 'disconnected', downSince: number | null }} o
+ * @returns {'offline' | 'disconnected' | null}
+ */
+export function notLiveBecause({ offline, conn, downSince }) {
+  if (offline) return 'offline';
+  if (conn !== 'connected' && (conn === 'disconnected' || downSince !== null)) return 'disconnected';
+  return null;
+}
+
+// ---- hold-to-run ----
+
+/**
+ * @typedef {ReturnType<typeof jogCommand>} JogMsg
+ */
+
+/**
+ * Hold-to-run jogging: while a jog button is held, the same JogCommand goes out at once and then every
+ * JOG_PERIOD_MS; on release (or any stop condition) one command with direction 0 goes out and nothing after
+ * it. The driver stops on its own ~200 ms after the last command, so a lost release is still safe.
+ * Never queues: each tick sends the current command once; a publish that throws (not connected, refused)
+ * ends the jog. Pressing another jog button replaces the running jog (the driver does the same).
+ */
+export class JogHold {
+  /** @type {JogMsg | null} */
+  #msg = null;
+  /** @type {any} */
+  #timer = null;
+
+  /**
+   * @param {object} o
+   * @param {(msg: JogMsg) => void} o.publish  throws when the message cannot be sent
+   * @param {() => boolean} [o.allowed]  checked before every send: false ends the jog (gate closed)
+   * @param {number} [o.periodMs]
+   * @param {(fn: () => void, ms: number) => any} [o.setInterval]
+   * @param {(t: any) => void} [o.clearInterval]
+   * @param {(active: JogMsg | null, reason: string) => void} [o.onChange]  the running jog changed
+   */
+  constructor(o) {
+    this.publish = o.publish;
+    this.allowed = o.allowed ?? (() => true);
+    this.periodMs = o.periodMs ?? JOG_PERIOD_MS;
+    this.setInterval = o.setInterval ?? ((fn, ms) => setInterval(fn, ms));
+    this.clearInterval = o.clearInterval ?? ((t) => clearInterval(t));
+    this.onChange = o.onChange ?? (() => {});
+  }
+
+  /** The running jog, if any. */
+  get active() {
+    return this.#msg;
+  }
+
+  /**
+   * Start (or replace) a jog: publishes at once, then every period until stop().
+   * @param {JogMsg} msg  direction +1 or -1
+   * @returns {boolean}  whether the jog is running
+   */
+  start(msg) {
+    if (!msg || (msg.direction !== 1 && msg.direction !== -1)) return false;
+    if (!this.allowed()) {
+      this.stop('not allowed');
+      return false;
+    }
+    this.#msg = msg;
+    this.#clearTimer();
+    if (!this.#send()) return false;
+    this.#timer = this.setInterval(() => this.#tick(), this.periodMs);
+    this.onChange(msg, 'started');
+    return true;
+  }
+
+  /**
+   * End the jog: one command with direction 0, then nothing. Safe to call any number of times.
+   * @param {string} [reason]
+   * @returns {boolean}  whether a jog was running
+   */
+  stop(reason = 'released') {
+    const m = this.#msg;
+    this.#clearTimer();
+    if (!m) return false;
+    this.#msg = null;
+    try {
+      this.publish({ ...m, direction: 0 });
+    } catch {
+      // Not connected or refused: the driver's timeout stops the arm.
+    }
+    this.onChange(null, reason);
+    return true;
+  }
+
+  #tick() {
+    if (!this.#msg) return this.#clearTimer();
+    if (!this.allowed()) return void this.stop('not allowed');
+    this.#send();
+  }
+
+  /** @returns {boolean} */
+  #send() {
+    const m = this.#msg;
+    if (!m) return false;
+    try {
+      this.publish(m);
+      return true;
+    } catch (e) {
+      this.stop(`not sent: ${e instanceof Error ? e.message : String(e)}`);
+      return false;
+    }
+  }
+
+  #clearTimer() {
+    if (this.#timer !== null) this.clearInterval(this.#timer);
+    this.#timer = null;
+  }
+}

@@ -1,0 +1,77 @@
+"""Hold-to-run jogging: the supervisor that decides what each JogCommand means and when a jog has timed out.
+
+The page publishes the held jog every 50 ms and direction 0 on release. Rules (DESIGN "Motion safety"):
+- a jog runs only while its heartbeats keep coming: none for `timeout` (0.2 s) -> stop;
+- direction 0 -> stop now;
+- a different jog replaces the running one at once (the controller gets the new speed; nothing is queued);
+- the same jog again is only a heartbeat (no new command to the controller).
+The clock is injected so the timeout is tested without sleeping. Not thread-safe: the driver holds its lock.
+"""
+from __future__ import annotations
+
+import enum
+import math
+import time
+from dataclasses import dataclass
+from typing import Callable, Optional
+
+JOINT, CARTESIAN = "joint", "cartesian"
+AXES = ("X", "Y", "Z", "RX", "RY", "RZ")
+FRAMES = ("base", "tool")
+
+
+@dataclass(frozen=True)
+class Jog:
+    group: str
+    mode: str          # "joint" or "cartesian"
+    axis: int          # joint: index into the group's joints; cartesian: 0..5 = X, Y, Z, RX, RY, RZ
+    direction: int     # +1, -1; 0 = stop
+    speed: float       # fraction (0, 1] of the manual maximum
+    frame: str = "base"
+
+    def label(self) -> str:
+        """What the state's motion_target says: "joint 2 +", "X -", "RZ + (tool)"."""
+        sign = "+" if self.direction > 0 else "-"
+        if self.mode == JOINT:
+            return f"joint {self.axis + 1} {sign}"
+        name = AXES[self.axis] if 0 <= self.axis < len(AXES) else f"axis {self.axis}"
+        return f"{name} {sign}" + (" (tool)" if self.frame == "tool" else "")
+
+    def same_motion(self, other: Optional["Jog"]) -> bool:
+        return other is not None and (self.group, self.mode, self.axis, self.direction, self.frame) == \
+            (other.group, other.mode, other.axis, other.direction, other.frame) and \
+            math.isclose(self.speed, other.speed, rel_tol=0, abs_tol=1e-9)
+
+
+class Decision(enum.Enum):
+    START = "start"            # send this jog's speed to the controller (new, or replacing another)
+    HEARTBEAT = "heartbeat"    # the running jog continues; nothing to send
+    STOP = "stop"              # stop the running jog now
+    NOTHING = "nothing"        # a stop with no jog running
+
+
+class JogSupervisor:
+    def __init__(self, timeout: float = 0.2, clock: Callable[[], float] = time.monotonic) -> None:
+        self.timeout = timeout
+        self.clock = clock
+        self.active: Optional[Jog] = None
+        self.last_beat = 0.0
+
+    def command(self, jog: Jog) -> Decision:
+        if jog.direction == 0:
+            return Decision.STOP if self.clear() is not None else Decision.NOTHING
+        now = self.clock()
+        if jog.same_motion(self.active):
+            self.last_beat = now
+            return Decision.HEARTBEAT
+        self.active, self.last_beat = jog, now
+        return Decision.START
+
+    def expired(self) -> bool:
+        """True when the running jog missed its heartbeats for longer than the timeout."""
+        return self.active is not None and self.clock() - self.last_beat > self.timeout
+
+    def clear(self) -> Optional[Jog]:
+        """Forget the running jog (the caller stops the arm); returns it, or None if none ran."""
+        jog, self.active = self.active, None
+        return jog

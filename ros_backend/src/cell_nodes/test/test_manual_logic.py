@@ -1,0 +1,692 @@
+"""Manual motion, the plain-Python logic (no ROS, no controller): limits and clamping, frames, the jog supervisor
+with a fake clock, the cell file section, and the driver core against a fake controller (refusals, clamped
+moves, jog heartbeat, stop, tool steps, reconnection)."""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+import pytest
+import yaml
+
+from cell_nodes.manual import frames
+from cell_nodes.manual.config import ConfigError, DigitalOut, MoveNamedStep, Wait, WaitInput, parse_manual
+from cell_nodes.manual.controller import CallTimeout, Gate, fk_lever
+from cell_nodes.manual.driver import ManualDriver
+from cell_nodes.manual.jog import Decision, Jog, JogSupervisor
+from cell_nodes.manual.limits import (STOP_DECEL_JOINT, STOP_DECEL_TCP, TCP_COMMAND_MARGIN, TCP_SPEED_CAP,
+                                      WATCHDOG_DECEL_JOINT, Limits)
+
+CAP = TCP_SPEED_CAP * TCP_COMMAND_MARGIN  # the highest TCP speed ever commanded
+from conftest import wait_for
+
+DEMO = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
+HOME = [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
+
+
+def demo_section() -> dict:
+    return yaml.safe_load(DEMO.read_text())["manual"]
+
+
+# ---------------------------------------------------------------------------------------------- limits
+def test_tcp_speed_is_capped_at_250_mm_s_whatever_the_cell_file_says() -> None:
+    assert Limits.from_section({"max_tcp_speed": 1.0}).max_tcp_speed == TCP_SPEED_CAP == 0.25
+    assert Limits.from_section({}).max_tcp_speed == 0.25
+    assert 0.24 <= CAP < 0.25  # commands keep a small margin: the measured speed must stay under the cap
+    lim = Limits.from_section({"max_tcp_speed": 0.1})
+    assert lim.max_tcp_speed == 0.1
+    assert lim.tcp_speed(5.0) == pytest.approx(0.1 * TCP_COMMAND_MARGIN) and lim.tcp_speed(0.05) == 0.05
+    loose = Limits.from_section({"max_tcp_speed": 3.0, "max_speed": 2.0})
+    assert loose.tcp_speed(3.0) == CAP
+    assert loose.cartesian_jog_speed(0, 1.0) == CAP  # X at full slider
+    assert loose.cartesian_jog_speed(2, 5.0) == CAP  # a slider above 1 is clamped to 1
+    assert loose.cartesian_jog_speed(5, 0.5) == 1.0   # RZ: rad/s, half of max_speed
+
+
+def test_zero_means_default_and_maxima_clamp() -> None:
+    lim = Limits.from_section(demo_section())
+    assert (lim.default_speed, lim.max_speed, lim.max_acceleration) == (0.25, 1.0, 1.5)
+    assert lim.joint_speed(0) == 0.25 and lim.joint_speed(-1) == 0.25 and lim.joint_speed(math.nan) == 0.25
+    assert lim.joint_speed(0.5) == 0.5 and lim.joint_speed(9.0) == 1.0
+    assert lim.joint_acceleration(0) == 0.5 and lim.joint_acceleration(99) == 1.5
+    assert lim.tcp_speed(0) == 0.1 and lim.tcp_acceleration(0) == 0.5 and lim.tcp_acceleration(50) == 1.0
+    # defaults never above the maxima
+    assert Limits.from_section({"default_speed": 2.0, "max_speed": 0.5}).default_speed == 0.5
+
+
+def test_jog_speed_fraction_and_joint_jog_tcp_cap() -> None:
+    lim = Limits.from_section(demo_section())
+    assert lim.jog_fraction(0) is None and lim.jog_fraction(-0.5) is None and lim.jog_fraction(math.inf) is None
+    assert lim.jog_fraction(0.3) == 0.3 and lim.jog_fraction(4) == 1.0
+    assert lim.joint_jog_speed(0.5) == 0.5
+    # 0.8 m from the joint axis at 1 rad/s would be 0.8 m/s at the TCP: capped to 0.25 m/s
+    assert lim.joint_jog_speed(1.0, lever=0.8) == pytest.approx(CAP / 0.8)
+    assert lim.joint_jog_speed(1.0, lever=0.1) == 1.0  # a short lever: max_speed is the limit
+
+
+# ---------------------------------------------------------------------------------------------- frames
+def test_rotation_vector_round_trip_including_half_turns() -> None:
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        r = axis * rng.uniform(0, math.pi)
+        m = frames.rotvec_to_matrix(r)
+        np.testing.assert_allclose(m @ m.T, np.eye(3), atol=1e-12)
+        np.testing.assert_allclose(frames.rotvec_to_matrix(frames.matrix_to_rotvec(m)), m, atol=1e-9)
+    half = frames.rotvec_to_matrix([0, math.pi, 0])
+    assert abs(np.linalg.norm(frames.matrix_to_rotvec(half)) - math.pi) < 1e-9
+    np.testing.assert_allclose(frames.rotvec_to_matrix([0, 0, math.pi / 2]) @ [1, 0, 0], [0, 1, 0], atol=1e-12)
+    x, y, z, w = frames.rotvec_to_quaternion([0, 0, math.pi / 2])
+    assert (x, y) == (0, 0) and z == pytest.approx(math.sqrt(0.5)) and w == pytest.approx(math.sqrt(0.5))
+
+
+def test_relative_offset_in_base_and_tool_frame() -> None:
+    # Tool pointing down (half turn about base Y): tool z = -base z, tool x = -base x.
+    pose = [0.4, -0.1, 0.3, 0.0, math.pi, 0.0]
+    up = frames.relative_target(pose, [0, 0, 0.05, 0, 0, 0], "base")
+    np.testing.assert_allclose(up[:3], [0.4, -0.1, 0.35], atol=1e-12)
+    np.testing.assert_allclose(frames.rotvec_to_matrix(up[3:]), frames.rotvec_to_matrix(pose[3:]), atol=1e-12)
+    down = frames.relative_target(pose, [0.01, 0, 0.05, 0, 0, 0], "tool")  # along the tool axes
+    np.testing.assert_allclose(down[:3], [0.39, -0.1, 0.25], atol=1e-12)
+    # Rotations: base frame turns about a base axis through the TCP; tool frame about the tool's own axis.
+    turned = frames.relative_target(pose, [0, 0, 0, 0, 0, 0.3], "base")
+    np.testing.assert_allclose(turned[:3], pose[:3], atol=1e-12)
+    np.testing.assert_allclose(frames.rotvec_to_matrix(turned[3:]),
+                               frames.rotvec_to_matrix([0, 0, 0.3]) @ frames.rotvec_to_matrix(pose[3:]), atol=1e-12)
+    spun = frames.relative_target(pose, [0, 0, 0, 0, 0, 0.3], "tool")
+    np.testing.assert_allclose(frames.rotvec_to_matrix(spun[3:]),
+                               frames.rotvec_to_matrix(pose[3:]) @ frames.rotvec_to_matrix([0, 0, 0.3]), atol=1e-12)
+    with pytest.raises(ValueError):
+        frames.relative_target(pose, [0] * 6, "world")
+    d, a = frames.pose_distance(pose, down)
+    assert d == pytest.approx(math.hypot(0.01, 0.05)) and a == pytest.approx(0, abs=1e-9)
+
+
+def test_tool_frame_jog_twist_is_rotated_into_the_base_frame() -> None:
+    down = [0.4, -0.1, 0.3, 0.0, math.pi, 0.0]
+    np.testing.assert_allclose(frames.tool_twist_to_base([0, 0, 0.25, 0, 0, 0], down), [0, 0, -0.25, 0, 0, 0],
+                               atol=1e-12)
+    np.testing.assert_allclose(frames.tool_twist_to_base([0.1, 0, 0, 0, 0, 0.5], down), [-0.1, 0, 0, 0, 0, -0.5],
+                               atol=1e-12)
+    turned = [0, 0, 0, 0, 0, math.pi / 2]  # tool x = base y
+    np.testing.assert_allclose(frames.tool_twist_to_base([0.2, 0, 0, 0.3, 0, 0], turned), [0, 0.2, 0, 0, 0.3, 0],
+                               atol=1e-12)
+
+
+def test_fk_lever_is_the_distance_from_the_joint_axis() -> None:
+    # A planar arm turning about z at the origin with its TCP 0.6 m out.
+    fk = lambda q: [0.6 * math.cos(q[0]), 0.6 * math.sin(q[0]), 0.2, 0, 0, 0]  # noqa: E731
+    assert fk_lever(fk, [0.3] * 6, 0) == pytest.approx(0.6, rel=1e-9)
+
+
+# ---------------------------------------------------------------------------------------------- jog supervisor
+class FakeClock:
+    def __init__(self) -> None:
+        self.t = 1000.0
+        self._lock = threading.Lock()
+
+    def __call__(self) -> float:
+        return self.t
+
+    def sleep(self, s: float) -> None:
+        with self._lock:
+            self.t += max(s, 1e-4)
+        time.sleep(0)  # let other threads run
+
+
+def jog(**kw) -> Jog:
+    base = dict(group="arm", mode="joint", axis=0, direction=1, speed=0.5, frame="base")
+    base.update(kw)
+    return Jog(**base)  # type: ignore[arg-type]
+
+
+def test_supervisor_heartbeat_timeout_with_a_fake_clock() -> None:
+    clock = FakeClock()
+    sup = JogSupervisor(0.2, clock)
+    assert sup.command(jog()) is Decision.START
+    for _ in range(10):  # 50 ms heartbeats keep it alive
+        clock.t += 0.05
+        assert sup.command(jog()) is Decision.HEARTBEAT
+        assert not sup.expired()
+    clock.t += 0.19
+    assert not sup.expired()
+    clock.t += 0.02  # 0.21 s since the last heartbeat
+    assert sup.expired()
+    assert sup.clear() == jog() and not sup.expired() and sup.active is None
+
+
+def test_supervisor_stop_replace_never_queue() -> None:
+    clock = FakeClock()
+    sup = JogSupervisor(0.2, clock)
+    assert sup.command(jog(direction=0)) is Decision.NOTHING
+    assert sup.command(jog()) is Decision.START
+    assert sup.command(jog(direction=-1)) is Decision.START   # replaces at once
+    assert sup.active == jog(direction=-1)
+    assert sup.command(jog(direction=-1, speed=0.8)) is Decision.START  # a new slider value is a new command
+    assert sup.command(jog(mode="cartesian", axis=2)) is Decision.START
+    assert sup.command(jog(direction=0)) is Decision.STOP
+    assert sup.active is None
+    assert sup.command(jog(direction=0)) is Decision.NOTHING
+    assert jog(axis=1, direction=-1).label() == "joint 2 -"
+    assert jog(mode="cartesian", axis=4, frame="tool").label() == "RY + (tool)"
+
+
+# ---------------------------------------------------------------------------------------------- cell file
+def test_demo_cell_section_parses_into_groups_and_tool_steps() -> None:
+    cfg = parse_manual(demo_section())
+    arm = cfg.groups["arm"]
+    assert arm.indices == (0, 1, 2, 3, 4, 5) and arm.configurations["home"] == tuple(HOME)
+    close = cfg.tools["gripper"].actions["close"].steps
+    assert close[0] == DigitalOut(0, True) and isinstance(close[1], WaitInput) and isinstance(close[-1], Wait)
+    assert cfg.tools["gripper"].actions["open"].steps[0] == DigitalOut(0, False)
+    assert cfg.limits["max_tcp_speed"] == 0.25
+
+
+@pytest.mark.parametrize("change, where", [
+    (lambda s: s["groups"][0]["joints"].__setitem__(2, "knee"), "manual.groups[0].joints[2]: 'knee'"),
+    (lambda s: s["groups"][0]["configurations"].__setitem__("bad", [0, 1]), "configurations.bad: 2 values for 6"),
+    (lambda s: s["tools"][0]["actions"][0]["steps"].append({"fly": 1}), "steps[3]: unknown step"),
+    (lambda s: s["tools"][0]["actions"][0]["steps"].append({"move_named": "nowhere", "group": "arm"}),
+     "no configuration 'nowhere'"),
+    (lambda s: s["tools"][0]["actions"][0]["steps"].append({"digital_out": 12, "value": True}), "digital_out"),
+    (lambda s: s.__setitem__("max_speed", "fast"), "manual.max_speed: expected a number"),
+])
+def test_unusable_sections_name_the_field(change, where: str) -> None:
+    section = demo_section()
+    change(section)
+    with pytest.raises(ConfigError, match=None) as e:
+        parse_manual(section)
+    assert where in str(e.value)
+
+
+def test_tool_steps_of_every_kind() -> None:
+    section = demo_section()
+    section["tools"].append({"name": "changer", "actions": [{"name": "swap", "steps": [
+        {"move_named": "home", "group": "arm"}, {"wait_input": 2, "value": True}, {"wait_s": 0}]}]})
+    steps = parse_manual(section).tools["changer"].actions["swap"].steps
+    assert steps == (MoveNamedStep("home", "arm"), WaitInput(2, True, 5.0), Wait(0.0))
+
+
+# ---------------------------------------------------------------------------------------------- the gate
+def test_gate_bounds_a_call_that_never_returns() -> None:
+    gate = Gate(timeout=0.2)
+    blocker = threading.Event()
+    assert gate.call(lambda: 41 + 1) == 42
+    t0 = time.monotonic()
+    with pytest.raises(CallTimeout):
+        gate.call(blocker.wait)  # like a ur_rtde call to a controller that vanished
+    assert time.monotonic() - t0 < 0.5
+    assert gate.call(lambda: "next call works") == "next call works"  # a fresh worker, the lock is free
+    with pytest.raises(ZeroDivisionError):
+        gate.call(lambda: 1 / 0)
+    blocker.set()
+    gate.close()
+
+
+# ---------------------------------------------------------------------------------------------- the driver
+class FakeRobot:
+    """A controller with the ur_rtde interfaces' names: moves complete on the next progress poll."""
+
+    def __init__(self) -> None:
+        self.q = list(HOME)
+        self.qd = [0.0] * 6
+        self.pose = [0.1, -0.49, 0.43, 0.0, math.pi, 0.0]
+        self.robot_mode, self.safety_mode, self.runtime = 7, 1, 2
+        self.reachable = True
+        self.connected = True
+        self.ik_ok = True
+        self.di = 1
+        self.do = 0
+        self.ts = 0.0
+        self.calls: list[tuple] = []
+        self.pending: Optional[tuple] = None
+        self.hold = False          # keep moves running until released
+        self.gripper_sensor = True  # DI1 follows DO0, like the sim's gripper
+        self.lock = threading.Lock()
+
+    # what a test looks at
+    def moves(self, name: str) -> list[tuple]:
+        return [c for c in self.calls if c[0] == name]
+
+
+class FakeReceive:
+    def __init__(self, robot: FakeRobot) -> None:
+        self.r = robot
+
+    def isConnected(self) -> bool: return self.r.connected
+    def disconnect(self) -> None: pass
+
+    def getTimestamp(self) -> float:
+        self.r.ts += 0.002
+        return self.r.ts
+
+    def getActualQ(self): return list(self.r.q)
+    def getActualQd(self): return list(self.r.qd)
+    def getActualTCPPose(self): return list(self.r.pose)
+    def getActualTCPSpeed(self): return [0.0] * 6
+    def getRobotMode(self): return self.r.robot_mode
+    def getSafetyMode(self): return self.r.safety_mode
+    def getSpeedScaling(self): return 1.0
+    def getRuntimeState(self): return self.r.runtime
+    def getActualDigitalInputBits(self): return self.r.di
+    def getActualDigitalOutputBits(self): return self.r.do
+
+
+class FakeControl:
+    def __init__(self, robot: FakeRobot) -> None:
+        self.r = robot
+
+    def _rec(self, *call) -> None:
+        self.r.calls.append(call)
+
+    def isConnected(self): return self.r.connected
+    def isProgramRunning(self): return self.r.runtime == 2
+    def reuploadScript(self): self._rec("reuploadScript"); self.r.runtime = 2; return True
+    def stopScript(self): self._rec("stopScript")
+    def disconnect(self): pass
+
+    def moveJ(self, q, speed, acceleration, asynchronous):
+        self._rec("moveJ", list(q), speed, acceleration, asynchronous)
+        self.r.pending = ("q", list(q))
+        return True
+
+    def moveL(self, pose, speed, acceleration, asynchronous):
+        self._rec("moveL", list(pose), speed, acceleration, asynchronous)
+        self.r.pending = ("pose", list(pose))
+        return True
+
+    def getAsyncOperationProgress(self) -> int:
+        if self.r.pending is None:
+            return -1
+        if self.r.hold:
+            return 0
+        kind, target = self.r.pending
+        if kind == "q":
+            self.r.q = target
+        else:
+            self.r.pose = target
+        self.r.pending = None
+        return 0
+
+    def speedJ(self, qd, acceleration, time):
+        self._rec("speedJ", list(qd), acceleration)
+        self.r.qd = list(qd)
+        return True
+
+    def speedL(self, xd, acceleration, time):
+        self._rec("speedL", list(xd), acceleration)
+        self.r.qd = [0.1] * 6
+        return True
+
+    def speedStop(self, a):
+        self._rec("speedStop", a)
+        self.r.qd = [0.0] * 6
+        return True
+
+    def stopJ(self, a, asynchronous):
+        self._rec("stopJ", a, asynchronous)
+        self.r.pending = None
+        self.r.qd = [0.0] * 6
+
+    def stopL(self, a, asynchronous):
+        self._rec("stopL", a, asynchronous)
+        self.r.pending = None
+
+    def getInverseKinematicsHasSolution(self, x, qnear, max_position_error, max_orientation_error):
+        self._rec("ik", list(x))
+        return self.r.ik_ok
+
+    def getForwardKinematics(self, q, tcp_offset):
+        # the base joint turns the TCP on a 0.5 m circle
+        return [0.5 * math.cos(q[0]), 0.5 * math.sin(q[0]), 0.4, 0.0, math.pi, 0.0]
+
+    def getTCPOffset(self): return [0, 0, 0.125, 0, 0, 0]
+
+
+class FakeIO:
+    def __init__(self, robot: FakeRobot) -> None:
+        self.r = robot
+
+    def setStandardDigitalOut(self, output_id: int, signal_level: bool) -> bool:
+        self.r.calls.append(("setStandardDigitalOut", output_id, signal_level))
+        bit = 1 << output_id
+        self.r.do = (self.r.do | bit) if signal_level else (self.r.do & ~bit)
+        if output_id == 0 and self.r.gripper_sensor:  # a gripper reporting "closed" on DI1, like the sim
+            self.r.di = (self.r.di | 2) if signal_level else (self.r.di & ~2)
+        return True
+
+    def disconnect(self) -> None: pass
+
+
+class FakeConnector:
+    def __init__(self, robot: FakeRobot) -> None:
+        self.r = robot
+
+    def _check(self) -> None:
+        if not self.r.reachable:
+            raise RuntimeError("connection refused")
+
+    def receive(self, host):
+        self._check()
+        self.r.connected = True
+        return FakeReceive(self.r)
+
+    def io(self, host):
+        self._check()
+        return FakeIO(self.r)
+
+    def control(self, host):
+        self._check()
+        return FakeControl(self.r)
+
+    def dashboard(self, host):
+        self._check()
+        return FakeDashboard(self.r)
+
+
+class FakeDashboard:
+    def __init__(self, robot: FakeRobot) -> None:
+        self.r = robot
+
+    def connect(self, timeout_ms: int = 2000) -> None: pass
+    def disconnect(self) -> None: pass
+
+    def stop(self) -> None:
+        self.r.calls.append(("dashboard stop",))
+        self.r.qd = [0.0] * 6
+        self.r.runtime = 1
+
+
+def make_driver(robot: FakeRobot, section: Optional[dict] = None, clock: Optional[FakeClock] = None) -> ManualDriver:
+    section = section or demo_section()
+    clock = clock or FakeClock()
+    d = ManualDriver(parse_manual(section), "10.0.0.5", FakeConnector(robot), Limits.from_section(parse_manual(
+        section).limits), clock=clock, sleep=clock.sleep)
+    return d
+
+
+@pytest.fixture
+def robot() -> FakeRobot:
+    return FakeRobot()
+
+
+@pytest.fixture
+def driver(robot: FakeRobot) -> ManualDriver:
+    d = make_driver(robot)
+    assert d.connect()
+    return d
+
+
+def test_unreachable_controller_is_refused_with_its_address(robot: FakeRobot) -> None:
+    robot.reachable = False
+    d = make_driver(robot)
+    assert not d.connect()
+    assert d.state().message == "robot controller at 10.0.0.5 is unreachable"
+    assert d.state().connected is False
+    for result in (d.move_named("arm", "home"), d.move_relative("arm", [0, 0, 0.05, 0, 0, 0], "base"),
+                   d.move_pose("arm", robot.pose), d.tool_action("gripper", "close")):
+        assert result == (False, "robot controller at 10.0.0.5 is unreachable")
+    assert robot.calls == []
+
+
+@pytest.mark.parametrize("robot_mode, safety_mode, message", [
+    (3, 1, "robot is not powered on (mode POWER_OFF)"),
+    (5, 1, "robot brakes are not released (mode IDLE)"),
+    (7, 3, "protective stop is active: clear it first"),
+    (7, 5, "safeguard stop is active: close the guard first"),
+    (7, 7, "emergency stop is active (ROBOT_EMERGENCY_STOP): release it first"),
+])
+def test_refusals_for_robot_and_safety_modes_leave_the_arm_alone(robot: FakeRobot, driver: ManualDriver,
+                                                                  robot_mode: int, safety_mode: int, message: str) -> None:
+    robot.robot_mode, robot.safety_mode = robot_mode, safety_mode
+    driver.poll()
+    assert driver.move_named("arm", "home") == (False, message)
+    assert driver.move_pose("arm", robot.pose) == (False, message)
+    assert driver.tool_action("gripper", "open") == (False, message)
+    driver.jog("arm", "joint", 0, 1, 1.0, "base")
+    assert driver.state().message == f"jog refused: {message}" and driver.state().motion == "idle"
+    assert robot.calls == []
+
+
+def test_unknown_names_and_bad_arguments_are_refused(robot: FakeRobot, driver: ManualDriver) -> None:
+    assert driver.move_named("legs", "home") == (False, "unknown motion group 'legs' (the cell has: arm)")
+    assert driver.move_named("arm", "dance") == (
+        False, "unknown configuration 'dance' for group arm (it has: home, pick_approach)")
+    assert driver.tool_action("laser", "fire") == (False, "unknown tool 'laser' (the cell has: gripper)")
+    assert driver.tool_action("gripper", "crush") == (False, "unknown action 'crush' for tool gripper (it has: open, close)")
+    ok, why = driver.move_relative("arm", [0, 0, 0.05], "base")
+    assert not ok and why.startswith("offset must be 6 numbers") and "got 3" in why
+    assert driver.move_relative("arm", [0] * 6, "world") == (False, "unknown frame 'world' (base or tool)")
+    ok, why = driver.move_pose("arm", [0.1, 0.2, math.nan, 0, 0, 0])
+    assert not ok and why.startswith("pose must be 6 numbers")
+    assert driver.get_pose("legs")[0] is False
+    assert robot.calls == []
+
+
+def test_ik_failure_refuses_and_the_arm_does_not_move(robot: FakeRobot, driver: ManualDriver) -> None:
+    robot.ik_ok = False
+    assert driver.move_pose("arm", [2.0, 0, 0, 0, 0, 0]) == (False, "pose unreachable: no inverse kinematics solution")
+    assert robot.moves("ik") and not robot.moves("moveL") and not robot.moves("moveJ")
+    assert driver.state().motion == "idle"
+    assert driver.state().message == "pose unreachable: no inverse kinematics solution"
+
+
+def test_moves_are_asynchronous_and_clamped_to_the_cell_maxima(robot: FakeRobot) -> None:
+    section = demo_section()
+    section["max_tcp_speed"] = 2.0  # a cell file the schema would refuse: the driver caps it anyway
+    d = make_driver(robot, section)
+    assert d.connect()
+    assert d.move_named("arm", "pick_approach", speed=50.0, acceleration=50.0) == (True, "arrived at pick_approach")
+    (_, q, v, a, is_async), = robot.moves("moveJ")
+    assert q == demo_section()["groups"][0]["configurations"]["pick_approach"]
+    assert (v, a, is_async) == (1.0, 1.5, True)
+    assert d.move_named("arm", "home") == (True, "arrived at home")
+    assert robot.moves("moveJ")[-1][2:] == (0.25, 0.5, True)  # 0 = the cell's defaults
+    start = list(robot.pose)
+    assert d.move_relative("arm", [0, 0, 0.05, 0, 0, 0], "base", speed=3.0, acceleration=9.0) == \
+        (True, "arrived at the relative target")
+    (_, pose, v, a, is_async), = robot.moves("moveL")
+    np.testing.assert_allclose(pose[:3], [start[0], start[1], start[2] + 0.05], atol=1e-12)
+    assert (v, a, is_async) == (CAP, 1.0, True)
+    assert d.move_pose("arm", start, speed=0.0) == (True, "arrived at the pose target")
+    assert robot.moves("moveL")[-1][2] == 0.1
+    assert d.state().motion == "idle" and d.state().progress == 1.0
+
+
+def test_a_group_of_some_joints_keeps_the_others(robot: FakeRobot) -> None:
+    section = demo_section()
+    section["groups"].append({"name": "wrist", "joints": ["wrist_3_joint", "wrist_1_joint"],
+                              "configurations": {"flat": [1.0, -1.0]}})
+    d = make_driver(robot, section)
+    assert d.connect()
+    assert d.move_named("wrist", "flat")[0]
+    q = robot.moves("moveJ")[-1][1]
+    assert q == [HOME[0], HOME[1], HOME[2], -1.0, HOME[4], 1.0]
+    ok, message, joints, tcp = d.get_pose("wrist")
+    assert ok and joints == [1.0, -1.0] and len(tcp) == 6
+
+
+def test_another_move_running_is_refused_and_stop_ends_it(robot: FakeRobot) -> None:
+    d = ManualDriver(parse_manual(demo_section()), "10.0.0.5", FakeConnector(robot),
+                     Limits.from_section(demo_section()))  # the real clock: two threads
+    assert d.connect()
+    robot.hold = True
+    result: dict = {}
+    mover = threading.Thread(target=lambda: result.setdefault("r", d.move_named("arm", "pick_approach")))
+    mover.start()
+    wait_for(lambda: robot.moves("moveJ"), 5, what="the move sent")
+    assert d.state().motion == "moving" and d.state().motion_target == "pick_approach"
+    assert d.move_named("arm", "home") == (False, "another move is running (pick_approach): stop it first")
+    assert d.tool_action("gripper", "open") == (False, "another move is running (pick_approach): stop it first")
+    d.jog("arm", "joint", 0, 1, 0.5, "base")
+    assert not robot.moves("speedJ")
+    assert d.state().message == "jog ignored: a move is running (pick_approach)"
+    assert d.stop() == (True, "stopped")
+    mover.join(5)
+    assert result["r"] == (False, "stopped")
+    assert robot.moves("stopJ") == [("stopJ", STOP_DECEL_JOINT, True)]
+    assert len(robot.moves("moveJ")) == 1
+    assert d.state().motion == "idle"
+    robot.hold = False
+    assert d.move_named("arm", "home") == (True, "arrived at home")
+
+
+def test_jog_heartbeat_timeout_stops_the_arm(robot: FakeRobot) -> None:
+    clock = FakeClock()
+    d = make_driver(robot, clock=clock)
+    assert d.connect()
+    d.jog("arm", "joint", 1, -1, 0.5, "base")
+    (_, qd, acc), = robot.moves("speedJ")
+    assert qd == [0, -0.5, 0, 0, 0, 0] and acc == 1.5
+    assert d.state().motion == "jogging" and d.state().motion_target == "joint 2 -"
+    for _ in range(6):  # heartbeats every 50 ms: no new command, no stop
+        clock.t += 0.05
+        d.jog("arm", "joint", 1, -1, 0.5, "base")
+        assert not d.check_heartbeat()
+    assert len(robot.moves("speedJ")) == 1 and not robot.moves("speedStop")
+    clock.t += 0.15
+    assert not d.check_heartbeat()
+    clock.t += 0.06  # 0.21 s without a heartbeat
+    assert d.check_heartbeat()
+    assert robot.moves("speedStop") == [("speedStop", WATCHDOG_DECEL_JOINT)]  # a lost link stops harder
+    assert d.state().message == "jog stopped: no heartbeat for 0.2 s"
+    d.poll()  # the arm stands still: idle
+    assert d.state().motion == "idle"
+    assert not d.check_heartbeat()
+
+
+def test_jog_release_replace_and_caps(robot: FakeRobot) -> None:
+    section = demo_section()
+    section["max_tcp_speed"] = 0.9
+    d = make_driver(robot, section)
+    assert d.connect()
+    d.jog("arm", "joint", 0, 1, 1.0, "base")  # the base joint 0.5 m from the TCP: 0.25 / 0.5 = 0.5 rad/s
+    assert robot.moves("speedJ")[-1][1][0] == pytest.approx(CAP / 0.5, rel=1e-3)
+    d.jog("arm", "cartesian", 0, 1, 1.0, "base")  # replaces at once: the joint jog stops, the Cartesian one starts
+    assert robot.moves("speedStop")[-1] == ("speedStop", STOP_DECEL_JOINT)
+    assert robot.moves("speedL")[-1][1] == [CAP, 0, 0, 0, 0, 0]  # full slider, capped under 0.25 m/s
+    d.jog("arm", "cartesian", 2, 1, 0.4, "tool")  # tool z points down in the base frame
+    np.testing.assert_allclose(robot.moves("speedL")[-1][1], [0, 0, -0.4 * CAP, 0, 0, 0], atol=1e-12)
+    d.jog("arm", "cartesian", 5, -1, 1.0, "base")
+    assert robot.moves("speedL")[-1][1] == [0, 0, 0, 0, 0, -1.0] and robot.moves("speedL")[-1][2] == 1.5
+    assert d.state().motion_target == "RZ -"
+    d.jog("arm", "cartesian", 5, 0, 1.0, "base")  # release
+    assert robot.moves("speedStop")[-1] == ("speedStop", STOP_DECEL_TCP)
+    assert d.state().motion in ("stopping", "idle") and d.state().message == "jog stopped"
+    d.poll()
+    assert d.state().motion == "idle"
+    n = len(robot.calls)
+    d.jog("arm", "joint", 9, 1, 1.0, "base")
+    assert d.state().message == "jog refused: group arm has no joint 10" and len(robot.calls) == n
+    d.jog("arm", "joint", 0, 1, 0.0, "base")
+    assert d.state().message == "jog refused: jog speed must be above 0" and len(robot.calls) == n
+
+
+def test_a_move_request_stops_a_running_jog_and_is_refused(robot: FakeRobot, driver: ManualDriver) -> None:
+    driver.jog("arm", "cartesian", 1, -1, 0.5, "base")
+    assert driver.move_named("arm", "home") == (False, "another move is running (jog Y -): stop it first")
+    assert robot.moves("speedStop") == [("speedStop", STOP_DECEL_TCP)]
+    assert driver.state().motion in ("stopping", "idle") and not robot.moves("moveJ")
+
+
+def test_stop_is_always_allowed_and_answers(robot: FakeRobot, driver: ManualDriver) -> None:
+    assert driver.stop() == (True, "stopped")  # nothing runs: no controller call
+    assert robot.calls == []
+    driver.jog("arm", "joint", 0, 1, 0.5, "base")
+    assert driver.stop() == (True, "stopped")
+    assert robot.moves("speedStop") and driver.state().motion == "idle"
+
+
+def test_stop_robot_also_stops_a_program_the_driver_did_not_start(robot: FakeRobot, driver: ManualDriver) -> None:
+    robot.qd = [0.3, 0, 0, 0, 0, 0]  # another program moves the arm
+    driver.poll()
+    assert driver.stop() == (True, "stopped")
+    assert robot.calls == [("dashboard stop",)]
+    robot.runtime = 2
+    driver.poll()
+    assert driver.stop() == (True, "stopped")  # the arm stands still: no program is stopped
+    assert robot.calls == [("dashboard stop",)]
+
+
+def test_tool_action_runs_its_steps(robot: FakeRobot, driver: ManualDriver) -> None:
+    assert driver.tool_action("gripper", "close") == (True, "gripper close done")
+    assert robot.moves("setStandardDigitalOut") == [("setStandardDigitalOut", 0, True)]
+    assert driver.tool_action("gripper", "open") == (True, "gripper open done")
+    assert robot.moves("setStandardDigitalOut")[-1] == ("setStandardDigitalOut", 0, False)
+    assert not robot.moves("moveJ")
+
+
+def test_tool_action_fails_when_its_input_never_comes(robot: FakeRobot, driver: ManualDriver) -> None:
+    robot.gripper_sensor = False  # a stuck gripper: DI1 never reports "closed"
+    assert driver.tool_action("gripper", "close") == (
+        False, "gripper close: digital input 1 did not turn on within 2 s")
+    assert driver.state().motion == "idle"
+
+
+def test_tool_change_sequence_with_a_move(robot: FakeRobot) -> None:
+    section = demo_section()
+    section["tools"].append({"name": "changer", "actions": [{"name": "park", "steps": [
+        {"move_named": "home", "group": "arm"}, {"digital_out": 3, "value": True}, {"wait_s": 0.1}]}]})
+    d = make_driver(robot, section)
+    assert d.connect()
+    assert d.tool_action("changer", "park") == (True, "changer park done")
+    names = [c[0] for c in robot.calls]
+    assert names.index("moveJ") < names.index("setStandardDigitalOut")
+
+
+def test_script_reuploaded_after_a_protective_stop(robot: FakeRobot, driver: ManualDriver) -> None:
+    assert driver.move_named("arm", "home")[0]
+    robot.runtime = 1  # the control script ended (protective stop, since cleared)
+    driver.poll()
+    assert driver.move_named("arm", "pick_approach") == (True, "arrived at pick_approach")
+    assert robot.moves("reuploadScript")
+
+
+def test_controller_loss_and_reconnection(robot: FakeRobot, driver: ManualDriver) -> None:
+    driver.jog("arm", "joint", 0, 1, 0.5, "base")
+    changes: list[str] = []
+    driver.on_change = lambda: changes.append(driver.state().message)
+    robot.connected = False  # the controller restarts (and the arm stands still)
+    robot.reachable = False
+    robot.qd = [0.0] * 6
+    driver.poll()
+    s = driver.state()
+    assert (s.connected, s.motion, s.message) == (False, "idle", "robot controller at 10.0.0.5 is unreachable")
+    assert "robot controller at 10.0.0.5 is unreachable" in changes
+    assert driver.move_named("arm", "home") == (False, "robot controller at 10.0.0.5 is unreachable")
+    assert driver.stop() == (False, "robot controller at 10.0.0.5 is unreachable")
+    assert not driver.connect()
+    robot.reachable = True
+    assert driver.connect()
+    assert driver.state().connected and driver.state().message == "reconnected to the robot controller at 10.0.0.5"
+    assert driver.move_named("arm", "home") == (True, "arrived at home")
+
+
+def test_stale_data_means_the_controller_is_gone(robot: FakeRobot) -> None:
+    clock = FakeClock()
+    d = make_driver(robot, clock=clock)
+    assert d.connect()
+    FakeReceive.getTimestamp, saved = (lambda self: 5.0), FakeReceive.getTimestamp
+    try:
+        d.poll()
+        clock.t += 0.5
+        d.poll()
+        assert d.connected
+        clock.t += 0.6
+        d.poll()
+        assert not d.connected
+    finally:
+        FakeReceive.getTimestamp = saved
+
+
+def test_groups_service_content(driver: ManualDriver) -> None:
+    groups, tools, limits = driver.groups()
+    assert [g.name for g in groups] == ["arm"] and tools == [("gripper", ["open", "close"])]
+    assert limits.as_dict() == {"default_speed": 0.25, "default_acceleration": 0.5, "max_speed": 1.0,
+                                "max_acceleration": 1.5, "max_tcp_speed": 0.25, "max_tcp_acceleration": 1.0,
+                                "jog_timeout": 0.2}

@@ -1,0 +1,150 @@
+"""The manual-motion node end to end: roscore + the simulated controller + `rosrun cell_nodes manual_node`, used
+over ROS the way the BFF relays the page's calls (services, the jog topic) and watched on its topics."""
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Iterator
+
+import pytest
+import rospy
+
+from conftest import wait_for
+from sim.tests.conftest import SimProcess
+
+HOST = "127.0.0.53"
+CELL = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
+UR_JOINTS = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
+             "wrist_3_joint"]
+
+
+class Latest:
+    """Keeps the newest message of a topic and when messages arrived."""
+
+    def __init__(self, topic: str, mtype) -> None:
+        self.msg = None
+        self.times: list[float] = []
+        self._lock = threading.Lock()
+        self.sub = rospy.Subscriber(topic, mtype, self._cb, queue_size=200)
+
+    def _cb(self, msg) -> None:
+        with self._lock:
+            self.msg = msg
+            self.times.append(time.monotonic())
+
+    def rate(self, window: float = 1.0) -> float:
+        with self._lock:
+            t = [x for x in self.times if x > self.times[-1] - window]
+        return (len(t) - 1) / (t[-1] - t[0]) if len(t) > 2 else 0.0
+
+
+def _service_up(name: str) -> bool:
+    try:
+        rospy.wait_for_service(name, timeout=0.2)
+        return True
+    except rospy.ROSException:
+        return False
+
+
+@pytest.fixture(scope="module")
+def node(roscore: str) -> Iterator[subprocess.Popen]:
+    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:1")
+    env.pop("CELL_CONFIG", None)
+    sim = SimProcess(HOST, ["--no-ros", "--no-cameras"], env)
+    sim.wait_ready()
+    log = tempfile.NamedTemporaryFile("w+", prefix="manual-node-", suffix=".log", delete=False)
+    proc = subprocess.Popen(["rosrun", "cell_nodes", "manual_node", f"_cell_config:={CELL}", f"_ur_host:={HOST}",
+                             "__name:=manual_test"], stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        if not rospy.core.is_initialized():
+            rospy.init_node("manual_test_client", anonymous=True, disable_signals=True)
+        wait_for(lambda: proc.poll() is None and _service_up("/cell/manual/stop"), 30, what="the node's services")
+        yield proc
+    finally:
+        t0 = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(5)
+        took = time.monotonic() - t0
+        print(f"\nthe node stopped {took:.2f} s after SIGINT")
+        sim.stop()
+        output = Path(log.name).read_text()
+        os.unlink(log.name)
+        assert "Traceback" not in output, output[-3000:]
+        assert took < 5, f"the node took {took:.1f} s to stop"
+
+
+def test_services_topics_and_a_jog_through_ros(node) -> None:
+    from cell_msgs.msg import JogCommand, RobotState
+    from cell_msgs.srv import GetMotionGroups, GetPose, MoveNamed, MoveRelative, ToolAction
+    from geometry_msgs.msg import PoseStamped
+    from sensor_msgs.msg import JointState
+    from std_srvs.srv import Trigger
+
+    joints = Latest("/joint_states", JointState)
+    state = Latest("/cell/manual/state", RobotState)
+    pose = Latest("/cell/manual/tcp_pose", PoseStamped)
+    wait_for(lambda: state.msg is not None and state.msg.connected and joints.msg and pose.msg, 10,
+             what="the driver's topics, connected")
+    s = state.msg
+    assert (s.controller, s.robot_mode, s.safety_mode, s.program_running) == (HOST, "RUNNING", "NORMAL", False)
+    assert len(s.joint_positions) == 6 and len(s.tcp_pose) == 6 and len(s.tcp_speed) == 6
+    assert s.message == f"connected to the robot controller at {HOST}" and s.motion == "idle"
+    assert list(joints.msg.name) == UR_JOINTS and len(joints.msg.velocity) == 6
+    assert pose.msg.header.frame_id == "base"
+    time.sleep(1.0)  # a one-second window to measure the publication rates in (nothing to wait for)
+    print(f"\n/joint_states at {joints.rate():.0f} Hz, /cell/manual/state at {state.rate():.0f} Hz")
+    assert joints.rate() > 80 and 15 < state.rate() < 40
+
+    groups = rospy.ServiceProxy("/cell/manual/groups", GetMotionGroups)()
+    assert [g.name for g in groups.groups] == ["arm"] and list(groups.groups[0].joints) == UR_JOINTS
+    assert [c.name for c in groups.groups[0].configurations] == ["home", "pick_approach"]
+    assert [(t.name, list(t.actions)) for t in groups.tools] == [("gripper", ["open", "close"])]
+    assert groups.limits.max_tcp_speed == 0.25 and groups.limits.jog_timeout == pytest.approx(0.2)
+
+    move_named = rospy.ServiceProxy("/cell/manual/move_named", MoveNamed)
+    r = move_named(group="arm", name="home", speed=1.0, acceleration=1.5)
+    assert (r.success, r.message) == (True, "arrived at home")
+    got = rospy.ServiceProxy("/cell/manual/get_pose", GetPose)(group="arm")
+    assert got.success and max(abs(a - b) for a, b in zip(got.joint_positions, [0.0, -1.5708, 1.5708, -1.5708,
+                                                                                 -1.5708, 0.0])) < 0.01
+    r = rospy.ServiceProxy("/cell/manual/move_relative", MoveRelative)(
+        group="arm", offset=[0, 0, 0.03, 0, 0, 0], frame="base", speed=0.1, acceleration=0.5)
+    assert r.success, r.message
+    assert abs(rospy.ServiceProxy("/cell/manual/get_pose", GetPose)(group="arm").tcp_pose[2] - got.tcp_pose[2]
+               - 0.03) < 0.001
+    r = move_named(group="arm", name="nowhere", speed=0, acceleration=0)
+    assert not r.success and r.message.startswith("unknown configuration 'nowhere'")
+    r = rospy.ServiceProxy("/cell/manual/tool", ToolAction)(tool="gripper", action="close")
+    assert (r.success, r.message) == (True, "gripper close done")
+    wait_for(lambda: state.msg.message == "gripper close done", 2, what="the result in the state")
+
+    # Hold-to-run over the topic: jog wrist 3 with 50 ms heartbeats, then let go of the "button".
+    jog = rospy.Publisher("/cell/manual/jog", JogCommand, queue_size=5)
+    wait_for(lambda: jog.get_num_connections() > 0, 5, what="the driver subscribed to the jog topic")
+    q0 = joints.msg.position[5]
+    msg = JogCommand(group="arm", mode="joint", axis=5, direction=1, speed=0.5, frame="base")
+    end = time.monotonic() + 0.6
+    while time.monotonic() < end:
+        jog.publish(msg)
+        time.sleep(0.05)
+    assert state.msg.motion == "jogging" and state.msg.motion_target == "joint 6 +"
+    assert abs(joints.msg.velocity[5] - 0.5) < 0.05
+    wait_for(lambda: state.msg.motion == "idle" and max(abs(v) for v in joints.msg.velocity) < 0.01, 2,
+             what="standstill after the heartbeats stopped")
+    assert state.msg.message == "jog stopped: no heartbeat for 0.2 s"
+    assert joints.msg.position[5] - q0 > 0.2
+    r = rospy.ServiceProxy("/cell/manual/stop", Trigger)()
+    assert (r.success, r.message) == (True, "stopped")
+    for rec in (joints, state, pose):
+        rec.sub.unregister()
+    assert not math.isnan(joints.msg.position[0])
