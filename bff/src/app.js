@@ -12,7 +12,7 @@ import { AuditLog } from './core/audit/audit-log.js';
 import { ControlLease } from './core/control/lease.js';
 import { controlRoutes } from './core/control/routes.js';
 import { configFor } from './core/access/pages.js';
-import { grantsFor, motionNames } from './core/access/grants.js';
+import { grantsFor, motionNames, argumentChecks } from './core/access/grants.js';
 import { RosHealth } from './core/ros/health.js';
 import { RosRelay } from './core/ros/relay.js';
 import { createOpGuard } from './core/ros/op-guard.js';
@@ -61,7 +61,9 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     upstreamUrl: `ws://127.0.0.1:${env.rosbridgePort}`,
     authenticate,
     checkOrigin: sameOrigin,
-    guard: createOpGuard({ grantsOf: (role) => grants.get(role), motion: motionNames(cell, features), lease, audit }),
+    guard: createOpGuard({
+      grantsOf: (role) => grants.get(role), motion: motionNames(cell, features), lease, audit, checkArgs: argumentChecks(cell, features),
+    }),
     isValid: (s) => tokens.sessionAlive(s.claims) && users.get(s.username)?.role === s.role,
     // A lease holder that disconnects gives control back.
     onClose: (s, stillOpen) => { if (stillOpen === 0) lease.release(s, 'released-on-disconnect'); },

@@ -4,10 +4,12 @@ import { menuPages, routeAccess, safeNext, featureByPath, pageTitle } from '../.
 import { features } from '../../src/lib/features/index.js';
 
 describe('routing from the feature list', () => {
-  it('knows home, manual and system with their paths', () => {
+  it('knows its features with their paths', () => {
     expect(features.map((p) => [p.id, p.path])).toEqual([
       ['home', '/'],
+      ['modules', '/modules'],
       ['manual', '/manual'],
+      ['alarms', '/alarms'],
       ['system', '/system'],
     ]);
     expect(featureByPath('/system/')?.id).toBe('system');
@@ -29,7 +31,7 @@ describe('routing from the feature list', () => {
   it('menu keeps config order, drops ids this build has no feature for, uses config titles', () => {
     const m = menuPages([
       { id: 'system', title: 'System admin' },
-      { id: 'modules', title: 'Modules' },
+      { id: 'nosuchfeature', title: 'Modules' },
       { id: 'home', title: 'Overview' },
     ]);
     expect(m.map((p) => [p.id, p.title])).toEqual([

@@ -4,7 +4,7 @@ import assert from 'node:assert/strict';
 import path from 'node:path';
 import { loadCell } from '../../src/core/config/cell.js';
 import { REPO_ROOT } from '../../src/core/config/env.js';
-import { grantsFor, motionNames, stopNames, mayMoveRobot } from '../../src/core/access/grants.js';
+import { grantsFor, motionNames, stopNames, mayMoveRobot, argumentChecks } from '../../src/core/access/grants.js';
 import { namesOf, KINDS } from '../../src/core/features/feature.js';
 import { createOpGuard } from '../../src/core/ros/op-guard.js';
 import { ControlLease } from '../../src/core/control/lease.js';
@@ -13,16 +13,17 @@ import { FEATURES } from '../../src/features/index.js';
 const cell = loadCell(path.join(REPO_ROOT, 'config/demo-cell.yaml'), FEATURES);
 const OPS = { publish: 'publish', call_service: 'call_service', subscribe: 'subscribe' };
 const msgFor = (kind, name, id) => (kind === 'call_service'
-  ? { op: 'call_service', id, service: name, args: {} }
+  ? { op: 'call_service', id, service: name, args: { name: cell.modules[0].name } }
   : { op: OPS[kind], id, topic: name, ...(kind === 'publish' ? { msg: {} } : {}) });
 
 /** A guard over the demo cell with a role whose grants are derived from `def` (no escape hatch). */
 function guardFor(roles) {
-  const c = { ...cell, roles };
+  // Every module open to every role here: the per-module roles have their own test below.
+  const c = { ...cell, roles, modules: cell.modules.map(({ roles: _, ...m }) => m) };
   const grants = new Map(Object.keys(roles).map((r) => [r, grantsFor(c, FEATURES, r)]));
   const lease = new ControlLease();
   const audit = { entries: [], record(e) { this.entries.push(e); } };
-  const guard = createOpGuard({ grantsOf: (r) => grants.get(r), motion: motionNames(c, FEATURES), lease, audit });
+  const guard = createOpGuard({ grantsOf: (r) => grants.get(r), motion: motionNames(c, FEATURES), lease, audit, checkArgs: argumentChecks(c, FEATURES) });
   const ctx = (role, sid) => ({ session: { username: role, role, sid }, ip: '127.0.0.1', rosapiCalls: new Map(), lastPublishAudit: new Map() });
   const send = (cx, m) => guard.inspect(cx, Buffer.from(JSON.stringify(m)), false);
   return { lease, ctx, send };
@@ -105,4 +106,29 @@ test('the demo operator: process and alarm commands, no manual moves, the escape
   assert.ok(!g.publish.includes('/cell/manual/jog'));
   assert.ok(g.subscribe.includes('/rosout_agg'));
   assert.ok(!g.subscribe.includes('/rosout'));
+});
+
+test('modules: a role launches and stops only the modules whose roles list it, and only modules of the cell', () => {
+  const modules = [
+    { name: 'Vision', launch: ['cell_bringup/launch/modules/vision.launch'], nodes: ['/vision'], roles: ['admin'] },
+    { name: 'Diagnostics', launch: ['cell_bringup/launch/modules/diagnostics.launch'], nodes: ['/system_monitor'], roles: ['admin', 'operator'] },
+    { name: 'Open', launch: ['cell_bringup/launch/modules/diagnostics.launch'], nodes: ['/x'] },
+  ];
+  const c = { ...cell, modules, roles: { admin: { pages: ['modules'], commands: ['modules'] }, operator: { pages: ['modules'], commands: ['modules'] } } };
+  const grants = new Map(Object.keys(c.roles).map((r) => [r, grantsFor(c, FEATURES, r)]));
+  const audit = { entries: [], record(e) { this.entries.push(e); } };
+  const guard = createOpGuard({ grantsOf: (r) => grants.get(r), motion: motionNames(c, FEATURES), lease: new ControlLease(), audit, checkArgs: argumentChecks(c, FEATURES) });
+  const ctx = (role) => ({ session: { username: role, role, sid: role }, ip: '127.0.0.1', rosapiCalls: new Map(), lastPublishAudit: new Map() });
+  const call = (role, service, name) => guard.inspect(ctx(role), Buffer.from(JSON.stringify({ op: 'call_service', id: 'x', service, args: { name } })), false);
+  for (const service of ['/cell/modules/launch', '/cell/modules/stop']) {
+    assert.equal(call('admin', service, 'Vision').forward, true);
+    assert.equal(call('operator', service, 'Diagnostics').forward, true);
+    assert.equal(call('operator', service, 'Open').forward, true, 'a module without roles: every role that commands modules');
+    const refused = call('operator', service, 'Vision');
+    assert.equal(refused.forward, false);
+    assert.match(JSON.parse(String(refused.replies[0].data)).msg, /operator role may not launch or stop the module "Vision"/);
+    assert.equal(call('admin', service, 'Nope').forward, false);
+  }
+  assert.equal(call('operator', '/cell/modules/output', 'Vision').forward, true, 'reading output is not a command');
+  assert.ok(audit.entries.some((e) => e.outcome === 'denied' && /Vision/.test(e.detail)));
 });

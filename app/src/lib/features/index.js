@@ -8,8 +8,11 @@
  * the cell file's title wins over `title` here.
  */
 import homeIcon from './home/icon.js';
+import modulesIcon from './modules/icon.js';
 import manualIcon from './manual/icon.js';
+import alarmsIcon from './alarms/icon.js';
 import systemIcon from './system/icon.js';
+import { alarmSignal } from './alarms/signal.svelte.js';
 
 /** SVG path data (24x24, stroked) or a small component taking `size`. @typedef {string | import('svelte').Component<{ size?: number }>} IconSpec */
 
@@ -27,11 +30,19 @@ import systemIcon from './system/icon.js';
  * @property {string} title  default title (the cell file's wins)
  * @property {IconSpec} icon
  * @property {() => Promise<{ default: import('svelte').Component<any> }>} load  lazy page import
+ * @property {() => Promise<{ default: import('svelte').Component<{ path: string }> }>} [shell]  a part the shell
+ *   draws on every page for roles that see this feature (e.g. the alarm banner); gets the feature's path
+ * @property {() => ({ count: number, label: string } | null)} [badge]  a live count beside the menu entry
  */
 
 /** @type {FeatureEntry[]} */
 export const features = [
   { id: 'home', path: '/', title: 'Home', icon: homeIcon, load: () => import('./home/Page.svelte') },
+  { id: 'modules', path: '/modules', title: 'Modules', icon: modulesIcon, load: () => import('./modules/Page.svelte') },
   { id: 'manual', path: '/manual', title: 'Manual motion', icon: manualIcon, load: () => import('./manual/Page.svelte') },
+  {
+    id: 'alarms', path: '/alarms', title: 'Alarms', icon: alarmsIcon, load: () => import('./alarms/Page.svelte'),
+    shell: () => import('./alarms/Shell.svelte'), badge: () => alarmSignal.badge,
+  },
   { id: 'system', path: '/system', title: 'System', icon: systemIcon, load: () => import('./system/Page.svelte') },
 ];

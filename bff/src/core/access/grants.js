@@ -58,3 +58,19 @@ export function robotStopFor(/** @type {Cell} */ cell, /** @type {Feature[]} */ 
   const f = features.find((x) => x.robotStop && (!x.schema || cell[x.id] !== undefined));
   return f?.robotStop ?? null;
 }
+
+/**
+ * The features' argument checks as one function (the op guard calls it for every op the grants allow).
+ * @param {Cell} cell @param {Feature[]} features
+ * @returns {(role: string, op: string, target: string, msg: any) => string | null}
+ */
+export function argumentChecks(cell, features) {
+  const checks = features.filter((f) => f.checkArgs && cell[f.id] !== undefined);
+  return (role, op, target, msg) => {
+    for (const f of checks) {
+      const why = /** @type {NonNullable<Feature['checkArgs']>} */ (f.checkArgs)(cell[f.id], role, op, target, msg);
+      if (why) return why;
+    }
+    return null;
+  };
+}

@@ -44,6 +44,9 @@ import { REPO_ROOT } from '../config/env.js';
  * @property {(section: any, cell: import('../config/cell-types.js').Cell) => RosNames} [stop]
  *   what stops the robot: granted to every role that sees a page that can move it, never lease-gated
  * @property {{service: string, type: string}} [robotStop] the service behind the app's "Stop robot" button
+ * @property {(section: any, role: string, op: string, target: string, msg: any) => string | null} [checkArgs]
+ *   for ops the grants already allow: a reason to refuse this one for its arguments (e.g. a module the role
+ *   may not launch), or null
  * @property {(deps: FeatureDeps) => import('express').Router} [routes] HTTP routes under /api/<id>/
  * @property {Record<string, object>} [openapi] OpenAPI paths of those routes
  */

@@ -17,10 +17,12 @@ let injected = 0;
 /**
  * @param {{grantsOf: (role: string) => import('../config/cell-types.js').RosGrants | undefined,
  *   motion: {publish: string[], call_service: string[]}, lease: import('../control/lease.js').ControlLease,
- *   audit: import('../audit/audit-log.js').AuditLog}} deps
- *   grantsOf: the role's grants (core/access/grants.js); motion: names whose publish or call needs the lease.
+ *   audit: import('../audit/audit-log.js').AuditLog,
+ *   checkArgs?: (role: string, op: string, target: string, msg: any) => string | null}} deps
+ *   grantsOf: the role's grants (core/access/grants.js); motion: names whose publish or call needs the lease;
+ *   checkArgs: the features' refusals by argument (core/access/grants.js argumentChecks).
  */
-export function createOpGuard({ grantsOf, motion, lease, audit }) {
+export function createOpGuard({ grantsOf, motion, lease, audit, checkArgs = () => null }) {
 
   /** @param {ClientCtx} ctx @param {string} op @param {string|undefined} target @param {'ok'|'denied'} outcome @param {string} [detail] */
   const record = (ctx, op, target, outcome, detail) => audit.record({
@@ -59,6 +61,11 @@ export function createOpGuard({ grantsOf, motion, lease, audit }) {
       }
       const { op } = msg;
       const target = d.target;
+      const argsWhy = checkArgs(ctx.session.role, op, target, msg);
+      if (argsWhy) {
+        record(ctx, op, target, 'denied', argsWhy);
+        return { forward: false, data, replies: refusal(msg, argsWhy) };
+      }
       if ((op === 'publish' || op === 'call_service') && matchesAny(motion[op], target) && !lease.isHolder(ctx.session)) {
         const h = lease.describe();
         const reason = h ? `${target} needs control, which ${h.username} holds` : `${target} needs control: take control first`;

@@ -109,16 +109,25 @@ def test_relative_z_move_within_1_mm(cell) -> None:
 
 def test_unreachable_pose_is_refused_and_the_arm_does_not_move(cell) -> None:
     driver, watch = cell
-    wait_for(lambda: speed_of(watch) < 1e-3, 3, what="the arm settled after the last move")
+    # Settled: still for 0.1 s in a row (the tracking of the last move can ring below 1e-3 rad/s for a moment).
+    still_since = [time.monotonic()]
+
+    def settled() -> bool:
+        if speed_of(watch) >= 1e-3:
+            still_since[0] = time.monotonic()
+        return time.monotonic() - still_since[0] > 0.1
+    wait_for(settled, 5, interval=0.005, what="the arm settled after the last move")
     q0 = q_of(watch)
     far = list(watch.getActualTCPPose())
     far[0] += 3.0  # 3 m away: outside the UR5's reach
     assert driver.move_pose("arm", far) == (False, "pose unreachable: no inverse kinematics solution")
     deadline = time.monotonic() + 0.3
+    travel = 0.0
     while time.monotonic() < deadline:  # watch for any motion for a while (nothing to wait for)
-        assert speed_of(watch) < 1e-3
+        travel = max(travel, float(np.max(np.abs(q_of(watch) - q0))))
         time.sleep(0.01)
-    assert np.max(np.abs(q_of(watch) - q0)) < 1e-4
+    # A started move would travel centimetres in 0.3 s; residual settling is far below a milliradian.
+    assert travel < 5e-4, f"the arm moved {travel:.5f} rad after a refused move"
     assert watch.getRuntimeState() == 2  # the control script still runs: no runtime error on the controller
     ok, why = driver.move_relative("arm", [0.02, 0, 0, 0, 0, 0], "base")  # and the next move works
     assert ok, why

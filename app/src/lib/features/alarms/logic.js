@@ -1,0 +1,106 @@
+/**
+ * The alarms feature's plain logic: ROS names, severities, the order of the list, the overall status's look, and
+ * which alarm the banner shows. No Svelte, no ROS: tests import it directly.
+ */
+
+export const FEATURE_ID = 'alarms';
+
+export const NAMES = Object.freeze({
+  list: { topic: '/cell/alarms/list', type: 'cell_msgs/AlarmList' },
+  status: { topic: '/cell/alarms/status', type: 'cell_msgs/SafetyStatus' },
+  reset: { service: '/cell/alarms/reset', type: 'std_srvs/Trigger' },
+});
+
+/** Both topics are latched and republished about once a second: older than this, they are stale. */
+export const STATUS_PERIOD_MS = 3000;
+
+/** Severity as colour and label (cell_msgs/Alarm: 0 info, 1 warning, 2 error). */
+export const SEVERITY = Object.freeze([
+  { tone: 'info', label: 'Info' },
+  { tone: 'warn', label: 'Warning' },
+  { tone: 'danger', label: 'Error' },
+]);
+
+/** @param {number} s */
+export const severityView = (s) => SEVERITY[Math.max(0, Math.min(SEVERITY.length - 1, Math.trunc(Number(s) || 0)))];
+
+/**
+ * @typedef {object} AlarmView
+ * @property {string} key  id + the how-many-th activation: a new key is a new alarm for the banner
+ * @property {string} id
+ * @property {string} text
+ * @property {number} severity
+ * @property {boolean} active
+ * @property {number | null} since  ms since the epoch (first seen)
+ * @property {number | null} lastSeen
+ * @property {string} source
+ * @property {number} count
+ */
+
+/** A ROS time ({secs, nsecs}, or {sec, nanosec}) in ms since the epoch; null when unset (0). @param {any} t */
+export function rosTimeMs(t) {
+  if (!t || typeof t !== 'object') return null;
+  const s = Number(t.secs ?? t.sec ?? 0);
+  const n = Number(t.nsecs ?? t.nanosec ?? 0);
+  const ms = s * 1000 + n / 1e6;
+  return Number.isFinite(ms) && ms > 0 ? ms : null;
+}
+
+/**
+ * cell_msgs/AlarmList as the page shows it: active first, then by severity (highest first), then newest first.
+ * @param {any} msg @returns {AlarmView[]}
+ */
+export function alarmViews(msg) {
+  const list = Array.isArray(msg?.alarms) ? msg.alarms : [];
+  return list
+    .filter((/** @type {any} */ a) => a && typeof a.id === 'string')
+    .map((/** @type {any} */ a) => {
+      const count = Number(a.count) || 1;
+      const since = rosTimeMs(a.since);
+      return {
+        key: `${a.id}#${count}@${since ?? 0}`,
+        id: a.id,
+        text: typeof a.text === 'string' && a.text ? a.text : a.id,
+        severity: Number(a.severity) || 0,
+        active: !!a.active,
+        since,
+        lastSeen: rosTimeMs(a.last_seen),
+        source: typeof a.source === 'string' ? a.source : '',
+        count,
+      };
+    })
+    .sort((/** @type {AlarmView} */ a, /** @type {AlarmView} */ b) =>
+      Number(b.active) - Number(a.active) || b.severity - a.severity || (b.since ?? 0) - (a.since ?? 0));
+}
+
+/** The overall safety status's look: colour and label. @param {any} status cell_msgs/SafetyStatus */
+export function statusView(status) {
+  const s = typeof status?.status === 'string' && status.status ? status.status : '';
+  if (!s) return { tone: 'neutral', label: 'Unknown' };
+  const tone = s === 'normal' ? 'ok' : s === 'warning' ? 'warn' : 'danger';
+  return { tone, label: s.charAt(0).toUpperCase() + s.slice(1) };
+}
+
+/**
+ * The alarm the banner shows: the newest active one not yet dismissed (dismissing hides the ones shown then; an
+ * alarm that comes in later, or comes back, has a new key and shows the banner again).
+ * @param {AlarmView[]} alarms @param {Set<string>} dismissed
+ * @returns {AlarmView | null}
+ */
+export function bannerAlarm(alarms, dismissed) {
+  const fresh = alarms.filter((a) => a.active && !dismissed.has(a.key));
+  fresh.sort((a, b) => (b.since ?? 0) - (a.since ?? 0) || b.severity - a.severity);
+  return fresh[0] ?? null;
+}
+
+/** How many alarms are active (the menu badge). @param {AlarmView[]} alarms */
+export const activeCount = (alarms) => alarms.filter((a) => a.active).length;
+
+/** "14:03:21" today, else "21 Nov 14:03". @param {number | null} ms @param {number} [now] */
+export function formatTime(ms, now = Date.now()) {
+  if (ms === null) return '—';
+  const d = new Date(ms);
+  const time = d.toLocaleTimeString('en-GB', { hour: '2-digit', minute: '2-digit', second: '2-digit' });
+  if (new Date(now).toDateString() === d.toDateString()) return time;
+  return `${d.toLocaleDateString('en-GB', { day: 'numeric', month: 'short' })} ${time.slice(0, 5)}`;
+}

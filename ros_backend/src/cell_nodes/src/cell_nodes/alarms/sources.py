@@ -1,0 +1,159 @@
+"""What each source turns into conditions. Inputs are the messages' fields, read by attribute or key, so the
+tests feed plain dicts and the node the ROS messages (no message class is imported here)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Iterable, Optional, Sequence
+
+from .table import ERROR, INFO, WARNING, Condition
+
+
+def field(obj: Any, name: str, default: Any = None) -> Any:
+    """A message field or a dict key."""
+    if isinstance(obj, dict):
+        return obj.get(name, default)
+    return getattr(obj, name, default)
+
+
+# ---------------------------------------------------------------------------------------------- the robot driver
+# UR safety modes that are alarms: name -> (alarm id, severity, text). NORMAL is none.
+SAFETY_ALARMS: dict[str, tuple[str, int, str]] = {
+    "REDUCED": ("robot.reduced_mode", WARNING, "robot in reduced mode: the safety limits are lowered"),
+    "RECOVERY": ("robot.recovery", WARNING, "robot in recovery mode: move it back inside the safety limits"),
+    "PROTECTIVE_STOP": ("robot.protective_stop", ERROR, "protective stop: the robot stopped; clear the cause, "
+                                                        "then unlock it"),
+    "SAFEGUARD_STOP": ("robot.safeguard_stop", ERROR, "safeguard stop: a safeguard (door, light curtain) is open"),
+    "AUTOMATIC_MODE_SAFEGUARD_STOP": ("robot.safeguard_stop", ERROR,
+                                      "safeguard stop (automatic mode): a safeguard is open"),
+    "SYSTEM_THREE_POSITION_ENABLING_STOP": ("robot.safeguard_stop", ERROR,
+                                            "safeguard stop: the three-position enabling device was released"),
+    "SYSTEM_EMERGENCY_STOP": ("robot.emergency_stop", ERROR, "emergency stop from the cell (system emergency stop)"),
+    "ROBOT_EMERGENCY_STOP": ("robot.emergency_stop", ERROR, "emergency stop pressed on the robot (teach pendant)"),
+    "VIOLATION": ("robot.safety_violation", ERROR, "safety violation: the robot's safety system stopped it"),
+    "FAULT": ("robot.safety_fault", ERROR, "safety system fault: the robot's safety system stopped it"),
+}
+QUIET_SAFETY = ("", "NORMAL")
+# UR robot modes that are alarms while the controller link is up.
+ROBOT_MODE_ALARMS: dict[str, tuple[str, int, str]] = {
+    "NO_CONTROLLER": ("robot.arm_disconnected", ERROR, "the controller reports no robot arm (mode NO_CONTROLLER)"),
+    "DISCONNECTED": ("robot.arm_disconnected", ERROR, "the robot arm is not connected to its controller"),
+    "CONFIRM_SAFETY": ("robot.confirm_safety", WARNING, "the safety configuration must be confirmed on the pendant"),
+    "BOOTING": ("robot.booting", INFO, "the robot arm is booting"),
+    "POWER_OFF": ("robot.power_off", INFO, "the robot arm is powered off"),
+    "BACKDRIVE": ("robot.backdrive", WARNING, "the robot arm is in backdrive mode (brakes released by hand)"),
+    "UPDATING_FIRMWARE": ("robot.updating_firmware", WARNING, "the robot arm is updating its firmware"),
+}
+STOP_STATUS = {"robot.emergency_stop": "emergency stop", "robot.protective_stop": "protective stop",
+               "robot.safeguard_stop": "safeguard stop"}
+
+
+@dataclass(frozen=True)
+class RobotInfo:
+    connected: bool = False
+    safety_mode: str = ""
+    robot_mode: str = ""
+
+
+def robot_conditions(state: Any) -> tuple[RobotInfo, list[Condition]]:
+    """cell_msgs/RobotState (the driver's /cell/manual/state) -> what it reports and its alarms."""
+    connected = bool(field(state, "connected", False))
+    safety = str(field(state, "safety_mode", "") or "")
+    mode = str(field(state, "robot_mode", "") or "")
+    if not connected:
+        host = field(state, "controller", "") or "?"
+        return RobotInfo(False, "", ""), [Condition("robot.disconnected", f"robot controller at {host} is unreachable",
+                                                    ERROR, "robot")]
+    out: list[Condition] = []
+    if safety in SAFETY_ALARMS:
+        aid, sev, text = SAFETY_ALARMS[safety]
+        out.append(Condition(aid, text, sev, "robot"))
+    elif safety not in QUIET_SAFETY:
+        out.append(Condition("robot.safety_mode", f"unexpected safety mode {safety}", WARNING, "robot"))
+    if mode in ROBOT_MODE_ALARMS:
+        aid, sev, text = ROBOT_MODE_ALARMS[mode]
+        out.append(Condition(aid, text, sev, "robot"))
+    return RobotInfo(True, safety, mode), out
+
+
+# ---------------------------------------------------------------------------------------------- device faults
+def fault_conditions(alarms: Iterable[Any]) -> list[Condition]:
+    """cell_msgs/AlarmList.alarms of a device (the sim's /sim/faults) -> one condition per active fault."""
+    out = []
+    for a in alarms:
+        if not field(a, "active", False):
+            continue
+        since = field(a, "since", None)
+        if since is not None and not isinstance(since, (int, float)):
+            since = since.to_sec() if hasattr(since, "to_sec") else None
+        sev = int(field(a, "severity", ERROR))
+        out.append(Condition(f"device.{field(a, 'id', '?')}", str(field(a, "text", "") or field(a, "id", "?")),
+                             min(max(sev, INFO), ERROR), "device", since or None))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- wrist force
+class ForceWatch:
+    """The norm of the wrist force against the limit, with hysteresis: trips above `limit`, clears below `clear`.
+    The text keeps the value of the tripping reading (it does not change while the alarm stays active)."""
+
+    def __init__(self, topic: str, limit: float, clear: float, alarm_id: str = "force.limit") -> None:
+        self.topic, self.limit, self.clear, self.alarm_id = topic, limit, clear, alarm_id
+        self.tripped: Optional[Condition] = None
+
+    def update(self, force: Sequence[float]) -> list[Condition]:
+        norm = math.sqrt(sum(float(f) * float(f) for f in force))
+        if not math.isfinite(norm):
+            return [self.tripped] if self.tripped else []
+        if self.tripped is None and norm > self.limit:
+            self.tripped = Condition(self.alarm_id, f"wrist force {norm:.0f} N above the {self.limit:g} N limit "
+                                                    f"({self.topic})", ERROR, "force")
+        elif self.tripped is not None and norm < self.clear:
+            self.tripped = None
+        return [self.tripped] if self.tripped else []
+
+
+def wrench_force(msg: Any) -> tuple[float, float, float]:
+    """geometry_msgs/WrenchStamped (or a dict of the same shape) -> (fx, fy, fz)."""
+    f = field(field(msg, "wrench"), "force")
+    return float(field(f, "x", 0.0)), float(field(f, "y", 0.0)), float(field(f, "z", 0.0))
+
+
+# ---------------------------------------------------------------------------------------------- modules
+def module_conditions(modules: Iterable[Any]) -> list[Condition]:
+    """cell_msgs/ModuleStates.modules -> one warning per module in state `incomplete` (some nodes down, or a launch
+    or stop that did not settle). The text is the module's `message`, else its nodes that are not alive."""
+    out = []
+    for m in modules:
+        if str(field(m, "state", "")) != "incomplete":
+            continue
+        name = str(field(m, "name", "?"))
+        message = str(field(m, "message", "") or "")
+        nodes, alive = list(field(m, "nodes", []) or []), list(field(m, "alive", []) or [])
+        missing = [n for n, up in zip(nodes, alive) if not up] if len(nodes) == len(alive) else []
+        why = (f": {message}" if message else f": not running: {', '.join(missing)}" if missing
+               else ": some of its nodes are not running")
+        out.append(Condition(f"module.{name}", f"module {name} is incomplete{why}", WARNING, "modules"))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- silence
+class SilenceWatch:
+    """A source that published and then stopped for `timeout` seconds. Before its first message: nothing, unless
+    the source is expected (`expected_since`: the node's start), then silent once `grace` seconds passed."""
+
+    def __init__(self, timeout: float, expected_since: Optional[float] = None, grace: float = 0.0) -> None:
+        self.timeout = timeout
+        self.last: Optional[float] = None
+        self.expected_since = expected_since
+        self.grace = max(grace, timeout)
+
+    def heard(self, now: float) -> None:
+        self.last = now
+
+    def silent(self, now: float) -> bool:
+        if self.timeout <= 0:
+            return False
+        if self.last is None:
+            return self.expected_since is not None and now - self.expected_since > self.grace
+        return now - self.last > self.timeout

@@ -1,0 +1,36 @@
+"""The overall safety status of the cell, from the alarm list and the robot's last reported modes."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+from .sources import STOP_STATUS, RobotInfo
+from .table import ERROR, WARNING, Alarm
+
+# Most urgent first. A robot stop names the status even if the cell file lowered that alarm's severity.
+STATUSES = ("emergency stop", "protective stop", "safeguard stop", "fault", "warning", "normal")
+
+
+@dataclass(frozen=True)
+class SafetyStatus:
+    status: str
+    text: str
+    active_count: int
+    inactive_count: int
+    highest_severity: int   # of the active alarms; -1 when none
+    safety_mode: str
+    robot_mode: str
+    controller_connected: bool
+
+
+def overall(alarms: Sequence[Alarm], robot: RobotInfo) -> SafetyStatus:
+    """`alarms` in list order (AlarmTable.alarms(): active first, most severe first, newest first)."""
+    active = [a for a in alarms if a.active]
+    highest = max((a.severity for a in active), default=-1)
+    ids = {a.id for a in active}
+    status = next((STOP_STATUS[i] for i in STOP_STATUS if i in ids), None)
+    if status is None:
+        status = "fault" if highest >= ERROR else "warning" if highest == WARNING else "normal"
+    text = active[0].text if active else "no active alarm"
+    return SafetyStatus(status, text, len(active), len(alarms) - len(active), highest, robot.safety_mode,
+                        robot.robot_mode, robot.connected)

@@ -1,0 +1,406 @@
+"""Alarms, the plain-Python logic (no ROS): each source's aggregation, active -> inactive -> reset -> gone, reset
+keeps active ones, first/last seen, the overall status, the operation-mode decision, the cell file section.
+Messages are fed as plain dicts; timestamps are explicit seconds."""
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+import yaml
+
+from cell_nodes.alarms.config import AlarmsConfig, ConfigError, alarm_mode_problem, parse_alarms
+from cell_nodes.alarms.core import Alarms
+from cell_nodes.alarms.mode import ModeKeeper, ModeRequest
+from cell_nodes.alarms.table import ERROR, INFO, WARNING, AlarmTable, Condition
+
+DEMO = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
+MODE = {"topic": "/cell/mode", "set_service": "/cell/set_mode", "modes": ["idle", "running", "alarm", "manual"]}
+WRENCH = "/cell/wrench"
+
+
+def cell(**alarms) -> dict:
+    return {"operation_mode": MODE, "alarms": alarms,
+            "sensors": [{"title": "F/T", "kind": "time-series", "topic": WRENCH, "type": "geometry_msgs/WrenchStamped"},
+                        {"title": "Tactile", "kind": "scatter", "topic": "/cell/tactile", "type": "cell_msgs/Scatter"}]}
+
+
+def make(now: float = 100.0, **alarms) -> Alarms:
+    return Alarms(parse_alarms(cell(**{"force_limit_n": 80, **alarms})), now)
+
+
+def robot(connected: bool = True, safety: str = "NORMAL", mode: str = "RUNNING", host: str = "10.0.0.5") -> dict:
+    return {"connected": connected, "controller": host, "safety_mode": safety, "robot_mode": mode}
+
+
+def fault(fid: str, active: bool, since: float = 0.0, severity: int = ERROR) -> dict:
+    return {"id": fid, "text": f"{fid} text", "severity": severity, "active": active, "since": since}
+
+
+def wrench(fx: float = 0.0, fy: float = 0.0, fz: float = -10.0) -> dict:
+    return {"wrench": {"force": {"x": fx, "y": fy, "z": fz}, "torque": {"x": 0, "y": 0, "z": 0}}}
+
+
+def listed(a: Alarms) -> dict[str, bool]:
+    return {x.id: x.active for x in a.alarms()}
+
+
+# ---------------------------------------------------------------------------------------------- the table
+def test_table_lifecycle_active_inactive_reset_gone_with_first_and_last_seen() -> None:
+    t = AlarmTable()
+    door = Condition("device.door_open", "door open", ERROR, "device")
+    assert t.report("faults", [door], 10.0) is True
+    a = t.get("device.door_open")
+    assert (a.active, a.first_seen, a.last_seen, a.count) == (True, 10.0, 10.0, 1)
+    assert t.report("faults", [door], 11.0) is False          # the same again: nothing to publish
+    t.touch(12.5)                                              # still reported: seen at 12.5
+    assert t.get("device.door_open").last_seen == 12.5
+    assert t.report("faults", [], 14.0) is True                # gone: inactive, stays in the list
+    a = t.get("device.door_open")
+    assert (a.active, a.first_seen, a.last_seen) == (False, 10.0, 14.0)
+    t.touch(20.0)                                              # an inactive alarm is not seen any more
+    assert t.get("device.door_open").last_seen == 14.0
+    assert t.report("faults", [door], 15.0) is True            # back before a reset: same entry, counted
+    a = t.get("device.door_open")
+    assert (a.active, a.first_seen, a.last_seen, a.count) == (True, 10.0, 15.0, 2)
+    t.report("faults", [], 16.0)
+    removed, active = t.reset()
+    assert [x.id for x in removed] == ["device.door_open"] and active == []
+    assert t.alarms() == []
+    t.report("faults", [door], 30.0)                           # after the reset: a new entry
+    assert (t.get("device.door_open").first_seen, t.get("device.door_open").count) == (30.0, 1)
+
+
+def test_table_merges_sources_and_orders_the_list() -> None:
+    t = AlarmTable()
+    t.report("a", [Condition("x", "x from a", WARNING, "a")], 1.0)
+    t.report("b", [Condition("x", "x from b", ERROR, "b"), Condition("info", "i", INFO, "b")], 2.0)
+    assert t.get("x").severity == ERROR and t.get("x").text == "x from b"  # the more severe report wins
+    t.report("b", [Condition("info", "i", INFO, "b")], 3.0)
+    assert t.get("x").active and t.get("x").severity == WARNING          # still detected by source a
+    t.report("a", [], 4.0)
+    assert not t.get("x").active
+    t.report("c", [Condition("w", "w", WARNING, "c"), Condition("e", "e", ERROR, "c")], 5.0)
+    t.report("c", [Condition("w", "w", WARNING, "c"), Condition("e", "e", ERROR, "c"),
+                   Condition("e2", "e2", ERROR, "c")], 6.0)
+    # active first, most severe first, newest first; inactive last
+    assert [(a.id, a.active) for a in t.alarms()] == [("e2", True), ("e", True), ("w", True), ("info", True),
+                                                      ("x", False)]
+
+
+def test_a_device_stamp_is_the_first_seen_time_but_never_in_the_future() -> None:
+    t = AlarmTable()
+    t.report("d", [Condition("old", "o", ERROR, "d", since=5.0), Condition("future", "f", ERROR, "d", since=99.0),
+                   Condition("unset", "u", ERROR, "d", since=0.0)], 10.0)
+    assert [t.get(i).first_seen for i in ("old", "future", "unset")] == [5.0, 10.0, 10.0]
+
+
+# ---------------------------------------------------------------------------------------------- sources
+@pytest.mark.parametrize("state, alarm_id, severity", [
+    (robot(safety="PROTECTIVE_STOP"), "robot.protective_stop", ERROR),
+    (robot(safety="SYSTEM_EMERGENCY_STOP"), "robot.emergency_stop", ERROR),
+    (robot(safety="ROBOT_EMERGENCY_STOP"), "robot.emergency_stop", ERROR),
+    (robot(safety="SAFEGUARD_STOP"), "robot.safeguard_stop", ERROR),
+    (robot(safety="REDUCED"), "robot.reduced_mode", WARNING),
+    (robot(safety="VIOLATION"), "robot.safety_violation", ERROR),
+    (robot(safety="FAULT"), "robot.safety_fault", ERROR),
+    (robot(safety="UNDEFINED_SAFETY_MODE"), "robot.safety_mode", WARNING),
+    (robot(mode="POWER_OFF"), "robot.power_off", INFO),
+    (robot(connected=False, safety="", mode="NO_CONTROLLER"), "robot.disconnected", ERROR),
+])
+def test_robot_state_becomes_alarms(state: dict, alarm_id: str, severity: int) -> None:
+    a = make(now=0.0)
+    assert not a.on_robot_state(robot(), 0.5)
+    assert a.on_robot_state(state, 1.0)
+    (alarm,) = a.alarms()
+    assert (alarm.id, alarm.severity, alarm.active, alarm.source) == (alarm_id, severity, True, "robot")
+    assert a.on_robot_state(robot(), 2.0)
+    assert listed(a) == {alarm_id: False}
+
+
+def test_robot_normal_running_is_no_alarm_and_disconnected_names_the_host() -> None:
+    a = make(now=0.0)
+    assert not a.on_robot_state(robot(), 1.0) and a.alarms() == []
+    a.on_robot_state(robot(connected=False, safety="", mode="NO_CONTROLLER", host="10.0.0.5"), 2.0)
+    assert a.alarms()[0].text == "robot controller at 10.0.0.5 is unreachable"
+    st = a.status()
+    assert (st.controller_connected, st.safety_mode, st.status) == (False, "", "fault")
+
+
+def test_device_faults_become_alarms_and_go_inactive_when_cleared() -> None:
+    a = make()
+    a.on_faults("/sim/faults", [fault("door_open", False), fault("gripper_fault", False)], 1.0)
+    assert a.alarms() == []                                   # inactive faults are no alarms
+    a.on_faults("/sim/faults", [fault("door_open", True, since=0.5), fault("gripper_fault", False)], 2.0)
+    (door,) = a.alarms()
+    assert (door.id, door.text, door.severity, door.source, door.first_seen) == \
+        ("device.door_open", "door_open text", ERROR, "device", 0.5)
+    a.on_faults("/sim/faults", [fault("door_open", False, since=3.0), fault("gripper_fault", False)], 3.0)
+    assert listed(a) == {"device.door_open": False}
+    # ROS times (anything with to_sec) work as the stamp too
+    a.on_faults("/sim/faults", [fault("gripper_fault", True, since=SimpleNamespace(to_sec=lambda: 3.5))], 4.0)
+    assert a.table.get("device.gripper_fault").first_seen == 3.5
+
+
+def test_force_limit_on_the_norm_with_hysteresis_and_unwatched_topics_ignored() -> None:
+    a = make()
+    assert not a.on_wrench(WRENCH, wrench(60, 50, -10), 1.0)    # |F| = 78.7 N: under 80
+    assert a.alarms() == []
+    assert a.on_wrench(WRENCH, wrench(60, 50, -20), 1.0)        # |F| = 80.6 N: over 80 (no axis is)
+    (f,) = a.alarms()
+    assert (f.id, f.severity, f.active, f.source) == ("force.limit", ERROR, True, "force")
+    assert "81 N" in f.text and "80 N" in f.text and WRENCH in f.text
+    assert not a.on_wrench(WRENCH, wrench(0, 0, -75), 2.0)      # 75 N: under the limit, above the 72 N clear level
+    assert a.alarms()[0].active and "81 N" in a.alarms()[0].text  # the text keeps the tripping value
+    assert a.on_wrench(WRENCH, wrench(0, 0, -71), 3.0)
+    assert listed(a) == {"force.limit": False}
+    assert not a.on_wrench("/other/wrench", wrench(0, 0, -500), 4.0)
+    assert listed(a) == {"force.limit": False}
+
+
+def test_force_supervision_is_off_without_a_limit_and_clear_level_is_configurable() -> None:
+    a = Alarms(parse_alarms(cell()), 0.0)
+    assert not a.on_wrench(WRENCH, wrench(0, 0, -500), 1.0) and a.alarms() == []
+    a = make(force_clear_n=50)
+    a.on_wrench(WRENCH, wrench(0, 0, 90), 1.0)
+    a.on_wrench(WRENCH, wrench(0, 0, 60), 2.0)
+    assert listed(a) == {"force.limit": True}
+    a.on_wrench(WRENCH, wrench(0, 0, 49), 3.0)
+    assert listed(a) == {"force.limit": False}
+
+
+def test_incomplete_modules_become_warnings_from_dicts_or_objects() -> None:
+    a = make()
+    a.on_modules([{"name": "vision", "state": "incomplete"}, {"name": "sim", "state": "active"},
+                  SimpleNamespace(name="gripper", state="transitioning")], 1.0)
+    (m,) = a.alarms()
+    assert (m.id, m.severity, m.source, m.active) == ("module.vision", WARNING, "modules", True)
+    assert m.text == "module vision is incomplete: some of its nodes are not running"
+    a.on_modules([SimpleNamespace(name="vision", state="active")], 2.0)
+    assert listed(a) == {"module.vision": False}
+    # the modules node's fields: its message, else the nodes that are not alive
+    a.on_modules([{"name": "vision", "state": "incomplete", "nodes": ["/cam", "/detector"], "alive": [True, False]}],
+                 3.0)
+    assert a.table.get("module.vision").text == "module vision is incomplete: not running: /detector"
+    a.on_modules([{"name": "vision", "state": "incomplete", "message": "launch did not settle within 10 s"}], 4.0)
+    assert a.table.get("module.vision").text == "module vision is incomplete: launch did not settle within 10 s"
+
+
+def test_severity_overrides_exact_ids_win_over_globs() -> None:
+    a = make(severity={"module.*": "error", "robot.*": "warning", "robot.emergency_stop": "error"})
+    a.on_modules([{"name": "vision", "state": "incomplete"}], 1.0)
+    a.on_robot_state(robot(safety="PROTECTIVE_STOP"), 1.0)
+    assert a.table.get("module.vision").severity == ERROR
+    assert a.table.get("robot.protective_stop").severity == WARNING
+    a.on_robot_state(robot(safety="ROBOT_EMERGENCY_STOP"), 2.0)
+    assert a.table.get("robot.emergency_stop").severity == ERROR
+
+
+def test_silent_robot_driver_and_wrench_raise_alarms_and_clear_when_back() -> None:
+    a = make(timeout_s=2)
+    assert not a.tick(50.0)                                   # never heard: the source may not exist
+    a.on_robot_state(robot(safety="REDUCED"), 100.0)
+    a.on_wrench(WRENCH, wrench(), 100.0)
+    assert not a.tick(101.9)
+    assert a.tick(102.5)
+    assert listed(a) == {"robot.reduced_mode": False, "robot.no_state": True, "force.no_data": True}
+    assert a.table.get("robot.no_state").severity == ERROR and a.table.get("force.no_data").severity == WARNING
+    st = a.status()
+    assert (st.controller_connected, st.safety_mode, st.robot_mode) == (False, "", "")
+    assert not a.tick(103.0)                                  # raised once
+    a.on_robot_state(robot(), 104.0)
+    a.on_wrench(WRENCH, wrench(), 104.0)
+    assert listed(a) == {"robot.reduced_mode": False, "robot.no_state": False, "force.no_data": False}
+    assert Alarms(parse_alarms(cell(timeout_s=0)), 0.0).tick(1e9) is False
+
+
+def test_an_expected_driver_that_never_publishes_raises_no_state_after_the_grace() -> None:
+    c = cell(force_limit_n=80, timeout_s=2, startup_grace_s=10)
+    c["manual"] = {"groups": []}                               # the cell has a robot driver
+    a = Alarms(parse_alarms(c), 100.0)
+    assert not a.tick(109.0) and a.alarms() == []
+    assert a.tick(110.5)
+    assert a.alarms()[0].id == "robot.no_state" and "since the start (10 s)" in a.alarms()[0].text
+    a.on_robot_state(robot(), 111.0)
+    assert listed(a) == {"robot.no_state": False}
+    assert not Alarms(parse_alarms(cell(timeout_s=2)), 100.0).tick(200.0)  # no driver in the cell: no alarm
+
+
+def test_the_drivers_first_connection_after_start_is_no_alarm_until_the_grace_is_over() -> None:
+    a = make(now=100.0, startup_grace_s=10)
+    down = robot(connected=False, safety="", mode="NO_CONTROLLER")
+    assert not a.on_robot_state(down, 101.0) and a.alarms() == []   # still connecting
+    assert not a.tick(102.5)
+    assert a.on_robot_state(robot(), 106.0) is False and a.alarms() == []  # connected: nothing ever listed
+    assert a.on_robot_state(down, 107.0)                              # connected once: now it is "lost"
+    assert listed(a) == {"robot.disconnected": True}
+    b = make(now=100.0, startup_grace_s=10)
+    b.on_robot_state(down, 101.0)
+    b.on_robot_state(down, 109.0)
+    assert b.alarms() == []
+    assert b.tick(110.5)                                              # never connected within the grace
+    assert listed(b) == {"robot.disconnected": True} and b.table.get("robot.disconnected").first_seen == 110.5
+
+
+# ---------------------------------------------------------------------------------------------- reset
+def test_reset_clears_inactive_keeps_active_and_says_what() -> None:
+    a = make()
+    a.on_faults("/sim/faults", [fault("door_open", True), fault("gripper_fault", True)], 1.0)
+    a.on_robot_state(robot(safety="PROTECTIVE_STOP"), 1.0)
+    a.on_faults("/sim/faults", [fault("door_open", False), fault("gripper_fault", True)], 2.0)
+    ok, message = a.reset()
+    assert ok and message == ("cleared 1 inactive alarm (device.door_open); "
+                              "2 still active (device.gripper_fault, robot.protective_stop)")
+    assert listed(a) == {"robot.protective_stop": True, "device.gripper_fault": True}
+    assert a.table.get("device.gripper_fault").first_seen == 1.0  # an active alarm keeps its history
+    a.on_robot_state(robot(), 3.0)
+    a.on_faults("/sim/faults", [fault("gripper_fault", False)], 3.0)
+    assert a.reset() == (True, "cleared 2 inactive alarms (device.gripper_fault, robot.protective_stop)")
+    assert a.alarms() == []
+    assert a.reset() == (True, "no inactive alarm to clear")
+
+
+# ---------------------------------------------------------------------------------------------- status
+def test_overall_status_follows_the_most_urgent_condition() -> None:
+    a = make()
+    st = a.status()
+    assert (st.status, st.text, st.active_count, st.inactive_count, st.highest_severity) == \
+        ("normal", "no active alarm", 0, 0, -1)
+    a.on_robot_state(robot(mode="POWER_OFF", safety="NORMAL"), 1.0)
+    assert (a.status().status, a.status().highest_severity, a.status().robot_mode) == ("normal", INFO, "POWER_OFF")
+    a.on_robot_state(robot(safety="REDUCED"), 2.0)
+    st = a.status()
+    assert (st.status, st.highest_severity, st.safety_mode, st.controller_connected) == \
+        ("warning", WARNING, "REDUCED", True)
+    assert (st.active_count, st.inactive_count) == (1, 1)       # power_off went inactive
+    a.on_faults("/sim/faults", [fault("gripper_fault", True)], 3.0)
+    assert (a.status().status, a.status().text) == ("fault", "gripper_fault text")
+    for safety, status in (("SAFEGUARD_STOP", "safeguard stop"), ("PROTECTIVE_STOP", "protective stop"),
+                           ("SYSTEM_EMERGENCY_STOP", "emergency stop")):
+        a.on_robot_state(robot(safety=safety), 4.0)
+        assert a.status().status == status
+    a.on_faults("/sim/faults", [], 5.0)
+    a.on_robot_state(robot(), 5.0)
+    a.reset()
+    assert a.status().status == "normal" and a.status().inactive_count == 0
+
+
+def test_outputs_publish_on_change_and_once_a_period() -> None:
+    a = make(now=0.0, publish_period_s=1.0)
+    alarms, status = a.outputs(0.0)
+    assert alarms == [] and status.status == "normal"           # the first call publishes both
+    assert a.outputs(0.1) == (None, None)                       # nothing changed
+    a.on_robot_state(robot(safety="REDUCED"), 0.2)
+    alarms, status = a.outputs(0.2)
+    assert [x.id for x in alarms] == ["robot.reduced_mode"] and status.status == "warning"
+    a.on_robot_state(robot(safety="REDUCED", mode="IDLE"), 0.3)
+    alarms, status = a.outputs(0.3)
+    assert alarms is None and status.robot_mode == "IDLE"       # status-only change
+    a.tick(1.05)
+    alarms, status = a.outputs(1.05)                            # the period: both again, last seen refreshed
+    assert alarms[0].last_seen == 1.05 and status is not None
+
+
+# ---------------------------------------------------------------------------------------------- operation mode
+def test_mode_goes_to_alarm_on_an_error_and_back_when_it_clears() -> None:
+    a = make()
+    a.on_faults("/sim/faults", [fault("door_open", True)], 1.0)
+    assert a.mode_request() is None                             # the mode is not known yet
+    a.on_mode("running", "ui:alice")
+    req = a.mode_request()
+    assert req.mode == "alarm" and "device.door_open" in req.reason
+    a.mode_done(req, False)                                     # the service was down: asked again
+    assert a.mode_request() == req
+    a.mode_done(req, True)
+    assert a.mode_request() is None                             # not asked again while the topic catches up
+    a.on_mode("alarm", "alarms")
+    assert a.mode_request() is None                             # still an error
+    a.on_faults("/sim/faults", [fault("door_open", False)], 2.0)
+    back = a.mode_request()
+    assert back == ModeRequest("running", "no error alarm active any more")
+    a.mode_done(back, True)
+    a.on_mode("running", "alarms")
+    assert a.mode_request() is None
+    # inactive error alarms (not reset yet) do not hold the mode
+    assert listed(a) == {"device.door_open": False}
+
+
+def test_warnings_do_not_change_the_mode() -> None:
+    a = make()
+    a.on_mode("running", "ui")
+    a.on_robot_state(robot(safety="REDUCED"), 1.0)
+    a.on_modules([{"name": "vision", "state": "incomplete"}], 1.0)
+    assert a.mode_request() is None
+    a = make(severity={"module.*": "error"})
+    a.on_mode("running", "ui")
+    a.on_modules([{"name": "vision", "state": "incomplete"}], 1.0)
+    assert a.mode_request().mode == "alarm"
+
+
+def test_mode_changed_by_someone_else_is_not_fought_nor_restored() -> None:
+    k = ModeKeeper()
+    k.on_mode("running", "ui")
+    assert k.decide({"e1"}).mode == "alarm"
+    k.on_mode("alarm", "alarms")
+    k.on_mode("manual", "ui:bob")                                # the operator recovers the cell
+    assert k.decide({"e1"}) is None                              # the same error: not switched again
+    assert k.decide(set()) is None                               # cleared: manual stays
+    assert k.decide({"e2"}).mode == "alarm"                      # a new error switches again...
+    k.on_mode("alarm", "alarms")
+    assert k.decide(set()) == ModeRequest("manual", "no error alarm active any more")  # ...and restores manual
+    # alarm set by someone else: not ours to give back
+    k = ModeKeeper()
+    k.on_mode("alarm", "ui")
+    assert k.decide({"e1"}) is None and k.decide(set()) is None
+    # someone else sets alarm over ours, then the error clears: left alone
+    k = ModeKeeper()
+    k.on_mode("idle", "startup")
+    assert k.decide({"e1"}).mode == "alarm"
+    k.on_mode("alarm", "ui:carol")
+    assert k.decide(set()) is None
+
+
+def test_mode_switching_off_when_the_cell_has_no_alarm_mode() -> None:
+    c = cell(force_limit_n=80)
+    c["operation_mode"] = dict(MODE, modes=["idle", "running"])
+    a = Alarms(parse_alarms(c), 0.0)
+    a.on_mode("running", "ui")
+    a.on_faults("/sim/faults", [fault("door_open", True)], 1.0)
+    assert a.mode_request() is None
+    assert "no 'alarm'" in alarm_mode_problem(c)
+    assert parse_alarms(cell(alarm_mode="")).alarm_mode == "" and alarm_mode_problem(cell(alarm_mode="")) is not None
+    assert alarm_mode_problem(cell()) is None
+
+
+# ---------------------------------------------------------------------------------------------- the cell file
+def test_demo_cell_section() -> None:
+    cfg = parse_alarms(yaml.safe_load(DEMO.read_text()))
+    assert cfg.force_limit_n == 80 and cfg.force_clear == pytest.approx(72)
+    assert cfg.wrench_topics == ("/cell/wrench",)              # from the sensors of type WrenchStamped
+    assert cfg.fault_topics == ("/sim/faults",)
+    assert cfg.robot_expected and cfg.timeout_s == 2 and cfg.startup_grace_s == 10
+    assert (cfg.alarm_mode, cfg.mode_topic, cfg.set_mode_service) == ("alarm", "/cell/mode", "/cell/set_mode")
+
+
+def test_defaults_and_errors_name_the_field() -> None:
+    cfg = parse_alarms({"operation_mode": MODE})
+    assert cfg == AlarmsConfig(alarm_mode="alarm")
+    assert cfg.force_limit_n is None and cfg.wrench_topics == () and cfg.timeout_s == 2.0
+    assert parse_alarms(cell(wrench_topics=["/a", "/b"])).wrench_topics == ("/a", "/b")
+    for section, where in (({"force_limit_n": -1}, "alarms.force_limit_n"),
+                           ({"force_limit_n": "high"}, "alarms.force_limit_n"),
+                           ({"force_limit_n": 80, "force_clear_n": 90}, "alarms.force_clear_n"),
+                           ({"force_clear_n": 50}, "alarms.force_clear_n"),
+                           ({"fault_topics": ["sim/faults"]}, "alarms.fault_topics[0]"),
+                           ({"severity": {"robot.*": "fatal"}}, "alarms.severity.robot.*"),
+                           ({"timeout_s": -1}, "alarms.timeout_s")):
+        with pytest.raises(ConfigError, match=rf"^{where}:".replace(".", r"\.").replace("*", r"\*")
+                           .replace("[", r"\[").replace("]", r"\]")):
+            parse_alarms(cell(**section))
+
+
+def test_two_wrench_topics_get_one_alarm_each() -> None:
+    a = make(wrench_topics=["/left/wrench", "/right/wrench"])
+    a.on_wrench("/left/wrench", wrench(0, 0, 100), 1.0)
+    a.on_wrench("/right/wrench", wrench(0, 0, 100), 1.0)
+    assert set(listed(a)) == {"force.limit:/left/wrench", "force.limit:/right/wrench"}
