@@ -55,12 +55,13 @@ try {
   await page.getByTestId('lease-holder').filter({ hasText: 'You have control' }).waitFor();
   await firstSample(() => true, 0, 20_000);
 
-  /** Set a range input to its maximum (Playwright cannot fill range inputs). @param {string} name */
-  const sliderToMax = (name) => page.getByRole('slider', { name }).evaluate((/** @type {HTMLInputElement} */ el) => {
-    el.value = el.max;
-    el.dispatchEvent(new Event('input', { bubbles: true }));
-    el.dispatchEvent(new Event('change', { bubbles: true }));
-  });
+  /** Set a range input to its maximum the way a keyboard user would (End), so the page's own input handler runs. */
+  const sliderToMax = async (name) => {
+    const slider = page.getByRole('slider', { name });
+    await slider.focus();
+    await slider.press('End');
+    await page.getByTestId('jog-speed-value').filter({ hasText: '100 %' }).waitFor();
+  };
   /** Press and hold a jog button for holdMs; returns the wall time of the press. */
   const hold = async (name, holdMs) => {
     const btn = page.getByRole('button', { name, exact: true });
