@@ -32,7 +32,7 @@ export default defineConfig({
     // The access checks drive /ros directly, and the hold-to-run pad is a thumb control: once, on the phone.
     // The wide layouts' own checks (the camera beside the controls) run on tablet and desktop.
     { name: 'phone', use: { ...devices['Pixel 7'], ...chromium }, testIgnore: /\.wide\.spec/ },
-    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium }, testIgnore: /access\.spec|manual\.spec|modules\.spec|alarms\.spec/ },
-    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium }, testIgnore: /access\.spec|manual\.spec|modules\.spec|alarms\.spec/ },
+    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium }, testIgnore: /access\.spec|manual\.spec|modules\.spec|alarms\.spec|process\.spec|routines\.spec|parameters\.spec/ },
+    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium }, testIgnore: /access\.spec|manual\.spec|modules\.spec|alarms\.spec|process\.spec|routines\.spec|parameters\.spec/ },
   ],
 });

@@ -4,7 +4,9 @@ The device topics are the ones the cell file declares (sim/cell_file.py): the wr
 WrenchStamped sensor topic and the tactile pad on every Scatter sensor topic (sensor rate), one
 sensor_msgs/CompressedImage camera per video stream (camera rate, only while the topic has a subscriber).
 Fixed names: /sim/faults (latched cell_msgs/AlarmList: the devices' fault state, for the cell's alarms feature to
-turn into alarms; the sim publishes no alarm list itself) and the service /sim/trigger_fault (cell_msgs/TriggerFault).
+turn into alarms; the sim publishes no alarm list itself), /sim/objects (geometry_msgs/PoseArray, frame `base`, the
+cubes in creation order at OBJECTS_RATE: ground truth for tests and the UI to see parts move; a real cell has no such
+topic) and the service /sim/trigger_fault (cell_msgs/TriggerFault).
 No /joint_states: the arm is a UR controller, which speaks RTDE, not ROS; the cell's robot driver
 (cell_nodes manual_node) reads it over RTDE and is the only source of /joint_states, as with a real robot.
 """
@@ -20,6 +22,8 @@ from .pacing import Pacer
 from .safety import Fault
 
 log = logging.getLogger("sim.ros")
+
+OBJECTS_RATE = 5.0  # Hz, /sim/objects (wall time): enough to watch a part being carried, cheap on the physics lock
 
 
 def ros_master_online() -> bool:
@@ -37,7 +41,7 @@ class RosBridge:
         import rospy
         from cell_msgs.msg import AlarmList, Scatter
         from cell_msgs.srv import TriggerFault
-        from geometry_msgs.msg import WrenchStamped
+        from geometry_msgs.msg import Pose, PoseArray, WrenchStamped
         from sensor_msgs.msg import CompressedImage
 
         self.rospy = rospy
@@ -62,22 +66,28 @@ class RosBridge:
             (s, rospy.Publisher(s.topic, CompressedImage, queue_size=2)) for s in devices.streams]
         for s in devices.streams:
             log.info("camera %r on %s shows the %s view", s.name, s.topic, s.view)
+        # The world frame is the robot's base frame (the arm stands at the origin): poses are in `base`.
+        self.pub_objects = rospy.Publisher("/sim/objects", PoseArray, queue_size=2)
         self._types = dict(AlarmList=AlarmList, Scatter=Scatter, WrenchStamped=WrenchStamped,
-                           CompressedImage=CompressedImage)
+                           CompressedImage=CompressedImage, Pose=Pose, PoseArray=PoseArray)
         self.service = rospy.Service("/sim/trigger_fault", TriggerFault, self._trigger_fault)
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
+        self._objects_thread: Optional[threading.Thread] = None
         self.published = 0
 
     def start(self) -> None:
         self.ctl.faults.subscribe(self._publish_faults)
         self._thread = threading.Thread(target=self._sensor_loop, name="ros-sensors", daemon=True)
         self._thread.start()
+        self._objects_thread = threading.Thread(target=self._objects_loop, name="ros-objects", daemon=True)
+        self._objects_thread.start()
 
     def stop(self) -> None:
         self._stop.set()
-        if self._thread is not None:
-            self._thread.join(1.0)
+        for t in (self._thread, self._objects_thread):
+            if t is not None:
+                t.join(1.0)
         self.service.shutdown("sim stopping")
         self.rospy.signal_shutdown("sim stopping")
 
@@ -113,6 +123,29 @@ class RosBridge:
             for pub in self.pub_tactile:
                 pub.publish(t)
         self.published += 1
+
+    def _objects_loop(self) -> None:
+        pacer = Pacer(1.0 / OBJECTS_RATE, self._stop)
+        while not self._stop.is_set():
+            try:
+                self._publish_objects()
+            except Exception:
+                log.exception("objects publish failed")
+            pacer.wait()
+
+    def _publish_objects(self) -> None:
+        with self.ctl.lock:  # the physics client is the controller loop's: read between two ticks
+            poses = self.ctl.world.body_poses()
+        out = self._types["PoseArray"]()
+        out.header.stamp = self.rospy.Time.now()
+        out.header.frame_id = "base"
+        for (x, y, z), (qx, qy, qz, qw) in poses:
+            m = self._types["Pose"]()
+            m.position.x, m.position.y, m.position.z = float(x), float(y), float(z)
+            o = m.orientation
+            o.x, o.y, o.z, o.w = float(qx), float(qy), float(qz), float(qw)
+            out.poses.append(m)
+        self.pub_objects.publish(out)
 
     def watched_views(self) -> set[str]:
         """Viewpoints shown by at least one stream whose image topic has a subscriber right now."""

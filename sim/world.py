@@ -83,6 +83,12 @@ class World:
             p.resetJointState(self.robot, j, q)
         for link in self.finger_links:
             p.changeDynamics(self.robot, link, lateralFriction=1.2, spinningFriction=0.01)
+        # The fingers are coupled, as on a real parallel gripper (one drive through a rack or linkage): they move
+        # together, so a gripped part stays centred. Two independent position-controlled fingers clamping a part
+        # both push with their full force wherever it is, and the part slid from finger to finger when lifted.
+        gear = p.createConstraint(self.robot, self.finger_joints[0], self.robot, self.finger_joints[1],
+                                  pybullet.JOINT_GEAR, (0, 1, 0), (0, 0, 0), (0, 0, 0))
+        p.changeConstraint(gear, gearRatio=-1, erp=0.2, maxForce=10 * GRIPPER_FORCE)
         p.enableJointForceTorqueSensor(self.robot, self.ft_joint, True)
         self._build_fixture()
         rng = np.random.default_rng(self.seed)

@@ -3,7 +3,7 @@ import { stackEnv, addUser, startStack } from './stack.js';
 export default async function globalSetup() {
   const port = Number(process.env.E2E_PORT || 18080);
   const env = stackEnv({
-    port, masterPort: port + 1, rosbridgePort: port + 2,
+    port, masterPort: port + 1, rosbridgePort: port + 2, ...(process.env.E2E_UR_HOST ? { urHost: process.env.E2E_UR_HOST } : {}),
     // The simulated cell runs as under `npm start` (the manual-motion tests drive it through the real driver).
   });
   const users = { admin: 'admin-e2e-password', operator: 'operator-e2e-password' };
@@ -12,5 +12,6 @@ export default async function globalSetup() {
   process.env.E2E_ROS_MASTER_URI = env.ROS_MASTER_URI;
   process.env.E2E_ROSBRIDGE_URL = `ws://127.0.0.1:${env.ROSBRIDGE_PORT}`;
   process.env.E2E_USERS = JSON.stringify(users);
+  process.env.E2E_DATA_DIR = env.DATA_DIR;
   globalThis.__cellStack = stack;
 }

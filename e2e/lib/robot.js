@@ -50,3 +50,37 @@ export async function watchRobot(url = process.env.E2E_ROSBRIDGE_URL || '') {
     close: () => ws.close(),
   };
 }
+
+/**
+ * @typedef {object} TcpWatch
+ * @property {() => number[]} pose  the latest actual TCP pose (x, y, z m, rx, ry, rz rad)
+ * @property {(target: number[], sinceMs?: number) => number} closest  the smallest distance (m) of the TCP to
+ *   target's position among the samples taken since sinceMs (epoch ms; default all)
+ * @property {() => void} close
+ */
+
+/** The driver's state (20 Hz, /cell/manual/state), kept as TCP samples. @param {string} url @returns {Promise<TcpWatch>} */
+export async function watchTcp(url = process.env.E2E_ROSBRIDGE_URL || '') {
+  const ws = new WebSocket(url);
+  /** @type {{ at: number, p: number[] }[]} */
+  const samples = [];
+  ws.on('message', (d) => {
+    const m = JSON.parse(d.toString());
+    if (m.op !== 'publish' || m.topic !== '/cell/manual/state' || !Array.isArray(m.msg?.tcp_pose) || m.msg.tcp_pose.length < 6) return;
+    samples.push({ at: Date.now(), p: m.msg.tcp_pose });
+    if (samples.length > 20_000) samples.splice(0, 10_000);
+  });
+  await new Promise((resolve, reject) => { ws.once('open', resolve); ws.once('error', reject); });
+  ws.send(JSON.stringify({ op: 'subscribe', id: 'e2e-tcp', topic: '/cell/manual/state', type: 'cell_msgs/RobotState' }));
+  const first = Date.now();
+  while (!samples.length) {
+    if (Date.now() - first > 20_000) throw new Error('no /cell/manual/state from the robot driver within 20 s');
+    await new Promise((r) => setTimeout(r, 20));
+  }
+  return {
+    pose: () => [...samples[samples.length - 1].p],
+    closest: (target, sinceMs = 0) => Math.min(...samples.filter((s) => s.at >= sinceMs)
+      .map((s) => Math.hypot(s.p[0] - target[0], s.p[1] - target[1], s.p[2] - target[2]))),
+    close: () => ws.close(),
+  };
+}

@@ -19,7 +19,7 @@ import rospy
 import rtde_receive
 from cell_msgs.msg import AlarmList, Scatter
 from cell_msgs.srv import TriggerFault
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import PoseArray, WrenchStamped
 from PIL import Image
 from sensor_msgs.msg import CompressedImage
 
@@ -110,7 +110,8 @@ def _sim_publications() -> dict[str, str]:
 def test_sim_publishes_exactly_the_cell_files_topics(roscore, start_sim, cell: Path, expected: dict[str, str]):
     sim = start_ros_sim(start_sim, roscore, cell)
     # No /joint_states: a UR controller speaks RTDE, not ROS; the robot driver publishes them (cell_nodes manual).
-    expected = {**expected, "/sim/faults": "cell_msgs/AlarmList", "/rosout": "rosgraph_msgs/Log"}
+    expected = {**expected, "/sim/faults": "cell_msgs/AlarmList", "/sim/objects": "geometry_msgs/PoseArray",
+                "/rosout": "rosgraph_msgs/Log"}
     # A previous test's sim unregisters as it stops; give the master a moment rather than race it.
     wait_for(lambda: _sim_publications() == expected, 10,
              what=f"the sim's publications to be exactly {sorted(expected)}")
@@ -173,6 +174,28 @@ def test_sensor_topics_faults_and_fault_service(ros_cell):
     finally:
         db.disconnect()
         r.disconnect()
+
+
+def test_object_poses_on_sim_objects(ros_cell):
+    """/sim/objects: the cubes' ground-truth poses (frame base, creation order) at ~5 Hz, where the seed put them."""
+    from sim.world import World
+    objects = Recorder("/sim/objects", PoseArray)
+    wait_for(lambda: len(objects.msgs) >= 8, 5, what="8 object pose messages")
+    assert 3.5 <= objects.rate(skip=1) <= 6.5, f"/sim/objects at {objects.rate(skip=1):.1f} Hz, expected ~5 Hz"
+    msg = objects.msgs[-1]
+    assert msg.header.frame_id == "base" and msg.header.stamp.to_sec() > 0
+    replica = World(seed=0)  # the sim's default seed: same placement
+    try:
+        expected = replica.body_poses()
+    finally:
+        replica.close()
+    assert len(msg.poses) == len(expected) == 3
+    for pose, (pos, orn) in zip(msg.poses, expected):
+        got = (pose.position.x, pose.position.y, pose.position.z)
+        assert max(abs(a - b) for a, b in zip(got, pos)) < 0.002, (got, pos)  # resting parts settle by < 1 mm
+        q = (pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
+        assert abs(abs(sum(a * b for a, b in zip(q, orn))) - 1) < 1e-3  # same orientation (q or -q)
+    objects.sub.unregister()
 
 
 def _active(rec: Recorder) -> set[str]:

@@ -8,7 +8,10 @@ describe('routing from the feature list', () => {
     expect(features.map((p) => [p.id, p.path])).toEqual([
       ['home', '/'],
       ['modules', '/modules'],
+      ['process', '/process'],
       ['manual', '/manual'],
+      ['parameters', '/parameters'],
+      ['routines', '/routines'],
       ['alarms', '/alarms'],
       ['system', '/system'],
     ]);

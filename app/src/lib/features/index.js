@@ -10,6 +10,9 @@
 import homeIcon from './home/icon.js';
 import modulesIcon from './modules/icon.js';
 import manualIcon from './manual/icon.js';
+import processIcon from './process/icon.js';
+import routinesIcon from './routines/icon.js';
+import parametersIcon from './parameters/icon.js';
 import alarmsIcon from './alarms/icon.js';
 import systemIcon from './system/icon.js';
 import { alarmSignal } from './alarms/signal.svelte.js';
@@ -39,7 +42,10 @@ import { alarmSignal } from './alarms/signal.svelte.js';
 export const features = [
   { id: 'home', path: '/', title: 'Home', icon: homeIcon, load: () => import('./home/Page.svelte') },
   { id: 'modules', path: '/modules', title: 'Modules', icon: modulesIcon, load: () => import('./modules/Page.svelte') },
+  { id: 'process', path: '/process', title: 'Process', icon: processIcon, load: () => import('./process/Page.svelte') },
   { id: 'manual', path: '/manual', title: 'Manual motion', icon: manualIcon, load: () => import('./manual/Page.svelte') },
+  { id: 'parameters', path: '/parameters', title: 'Parameters', icon: parametersIcon, load: () => import('./parameters/Page.svelte') },
+  { id: 'routines', path: '/routines', title: 'Routines', icon: routinesIcon, load: () => import('./routines/Page.svelte') },
   {
     id: 'alarms', path: '/alarms', title: 'Alarms', icon: alarmsIcon, load: () => import('./alarms/Page.svelte'),
     shell: () => import('./alarms/Shell.svelte'), badge: () => alarmSignal.badge,

@@ -1,12 +1,21 @@
-// Automatic process (feature 5): start, stop, pause/resume, run one step; its state, status fields and log.
-// Node: /cell/process/. Start, resume, step and an action goal move the robot (lease); stop, pause and cancel never wait for it.
+// Automatic process (feature 5): start, stop, pause/resume, run one operation, dry run; its state, status fields
+// and log. Nodes: /cell/process/ (cell_nodes process). Start, resume, step and an action goal move the robot
+// (lease); stop, pause and cancel never wait for it.
 import { defineFeature, featureSchema } from '../../core/features/feature.js';
+
+/** @param {any} o @returns {string} */
+const operationName = (o) => (typeof o === 'string' ? o : String(o?.name ?? ''));
 
 export default defineFeature({
   id: 'process',
   title: 'Process',
   schema: featureSchema('process'),
-  view: (section) => ({ operations: section.operations || [], status_fields: section.status_fields || [] }),
+  // The page needs the names (the node's state has them too, live) and the status panel; the steps stay on the PC.
+  view: (section) => ({
+    operations: (section.operations || []).map(operationName),
+    status_fields: section.status_fields || [],
+    start_configuration: section.start_configuration ?? null,
+  }),
   reads: (section) => ({
     subscribe: ['/cell/process/state', '/cell/process/log', ...(section.status_fields || []).map((f) => f.topic),
       ...(section.action ? [`${section.action}/status`, `${section.action}/feedback`, `${section.action}/result`] : [])],

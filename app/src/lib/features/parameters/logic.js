@@ -1,0 +1,195 @@
+/**
+ * The Parameters page's plain logic: the node's definitions and values, typed validation in place (the node
+ * validates again and has the last word), the diff shown before Save, and the local draft kept while offline.
+ * No Svelte, no ROS: tests import it directly.
+ */
+
+export const FEATURE_ID = 'parameters';
+
+export const NAMES = Object.freeze({
+  get: { service: '/cell/parameters/get', type: 'cell_msgs/GetParameters' },
+  set: { service: '/cell/parameters/set', type: 'cell_msgs/SetParameters' },
+  values: { topic: '/cell/parameters/values', type: 'cell_msgs/ParameterValues' },
+});
+
+/**
+ * @typedef {object} ParamDef
+ * @property {string} id
+ * @property {string} category
+ * @property {string} label
+ * @property {'int' | 'float' | 'bool' | 'string' | 'enum'} type
+ * @property {string} unit
+ * @property {number | null} min
+ * @property {number | null} max
+ * @property {string[]} options
+ * @property {number | null} decimals  float: at most this many digits after the point
+ * @property {number} maxLength  string: at most this many characters
+ * @property {string} value  the saved value, as text
+ * @property {string} defaultValue
+ */
+
+/** @param {any} t @returns {ParamDef['type']} */
+const typeOf = (t) => (['int', 'float', 'bool', 'string', 'enum'].includes(t) ? t : 'string');
+
+/**
+ * One definition from the node's answer (cell_msgs/Parameter).
+ * @param {any} p @returns {ParamDef}
+ */
+export function paramDef(p) {
+  return {
+    id: String(p?.id ?? ''),
+    category: String(p?.category || 'General'),
+    label: String(p?.label || p?.id || ''),
+    type: typeOf(p?.type),
+    unit: String(p?.unit ?? ''),
+    min: p?.has_min ? Number(p.min) : null,
+    max: p?.has_max ? Number(p.max) : null,
+    options: Array.isArray(p?.options) ? p.options.map(String) : [],
+    decimals: Number.isInteger(p?.decimals) && p.decimals >= 0 ? p.decimals : null,
+    maxLength: Number(p?.max_length) > 0 ? Number(p.max_length) : 200,
+    value: String(p?.value ?? ''),
+    defaultValue: String(p?.default_value ?? ''),
+  };
+}
+
+/** Definitions grouped by category, in first-seen order. @param {ParamDef[]} defs */
+export function byCategory(defs) {
+  /** @type {Map<string, ParamDef[]>} */
+  const m = new Map();
+  for (const d of defs) {
+    if (!m.has(d.category)) m.set(d.category, []);
+    m.get(d.category)?.push(d);
+  }
+  return [...m].map(([category, items]) => ({ category, items }));
+}
+
+/** @param {number} n */
+const show = (n) => String(n);
+
+/**
+ * Why a value is not acceptable for its parameter ('' when it is). Texts name the field, the value and the limit.
+ * @param {ParamDef} d @param {string} text
+ */
+export function validate(d, text) {
+  const v = String(text ?? '').trim();
+  const unit = d.unit ? ` ${d.unit}` : '';
+  const range = (/** @type {number} */ n) => {
+    if (d.min !== null && n < d.min) return `${d.label}: ${show(n)}${unit} is below the minimum ${show(d.min)}${unit}`;
+    if (d.max !== null && n > d.max) return `${d.label}: ${show(n)}${unit} is above the maximum ${show(d.max)}${unit}`;
+    return '';
+  };
+  switch (d.type) {
+    case 'int':
+      if (!/^[+-]?\d+$/.test(v)) return `${d.label}: '${v}' is not a whole number`;
+      return range(Number(v));
+    case 'float': {
+      if (v === '' || !/^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/.test(v)) return `${d.label}: '${v}' is not a number`;
+      const frac = /^[^eE]*\.(\d+)/.exec(v)?.[1] ?? '';
+      if (d.decimals !== null && !/[eE]/.test(v) && frac.replace(/0+$/, '').length > d.decimals) {
+        return `${d.label}: at most ${d.decimals} digit${d.decimals === 1 ? '' : 's'} after the point`;
+      }
+      return range(Number(v));
+    }
+    case 'bool':
+      return v === 'true' || v === 'false' ? '' : `${d.label}: '${v}' is not true or false`;
+    case 'enum':
+      return d.options.includes(v) ? '' : `${d.label}: '${v}' is not one of ${d.options.join(', ')}`;
+    default:
+      if ([...String(text ?? '')].length > d.maxLength) return `${d.label}: at most ${d.maxLength} characters`;
+      // (Line feed and tab are allowed, as the node allows them.)
+      // eslint-disable-next-line no-control-regex
+      return /[\u0000-\u0008\u000b-\u001f\u007f]/.test(String(text ?? '')) ? `${d.label}: control characters are not allowed` : '';
+  }
+}
+
+/** The text a value is sent and compared as (numbers trimmed; strings as typed). @param {ParamDef} d @param {string} text */
+export function canonical(d, text) {
+  return d.type === 'string' ? String(text ?? '') : String(text ?? '').trim();
+}
+
+/**
+ * @typedef {{ id: string, label: string, unit: string, from: string, to: string }} Change
+ */
+
+/** Same value? Numbers by value (60.0 is 60), the rest as text. @param {ParamDef} d @param {string} a @param {string} b */
+export function sameValue(d, a, b) {
+  if ((d.type === 'int' || d.type === 'float') && a.trim() !== '' && b.trim() !== '' && Number.isFinite(Number(a)) && Number.isFinite(Number(b))) {
+    return Number(a) === Number(b);
+  }
+  return a === b;
+}
+
+/**
+ * What Save will change: every edited value that differs from the saved one.
+ * @param {ParamDef[]} defs @param {Record<string, string>} draft
+ * @returns {Change[]}
+ */
+export function diff(defs, draft) {
+  const out = [];
+  for (const d of defs) {
+    if (!(d.id in draft)) continue;
+    const to = canonical(d, draft[d.id]);
+    if (!sameValue(d, to, d.value)) out.push({ id: d.id, label: d.label, unit: d.unit, from: d.value, to });
+  }
+  return out;
+}
+
+/** @param {ParamDef[]} defs @param {Record<string, string>} draft @returns {Record<string, string>} id -> problem */
+export function problems(defs, draft) {
+  /** @type {Record<string, string>} */
+  const out = {};
+  for (const d of defs) {
+    if (!(d.id in draft)) continue;
+    const p = validate(d, draft[d.id]);
+    if (p) out[d.id] = p;
+  }
+  return out;
+}
+
+/** The node's per-field errors (cell_msgs/FieldError[]) as id -> message. @param {any} r */
+export function fieldErrors(r) {
+  /** @type {Record<string, string>} */
+  const out = {};
+  for (const e of Array.isArray(r?.errors) ? r.errors : []) if (e?.id) out[String(e.id)] = String(e.message ?? 'invalid');
+  return out;
+}
+
+// ---- the local draft: an edit made offline (or not yet saved) survives a reload, to review and send later ----
+
+/** @typedef {{ values: Record<string, string>, savedAt: number }} Draft */
+
+/** @param {string | null} user */
+export const draftKey = (user) => `cell-ui:parameters-draft:${user ?? ''}`;
+
+/**
+ * @param {Pick<Storage, 'getItem'> | null} storage @param {string | null} user
+ * @returns {Draft | null}
+ */
+export function loadDraft(storage, user) {
+  try {
+    const raw = storage?.getItem(draftKey(user));
+    if (!raw) return null;
+    const d = JSON.parse(raw);
+    if (!d || typeof d.values !== 'object' || !Number.isFinite(d.savedAt)) return null;
+    /** @type {Record<string, string>} */
+    const values = {};
+    for (const [k, v] of Object.entries(d.values)) if (typeof v === 'string') values[k] = v;
+    return { values, savedAt: d.savedAt };
+  } catch {
+    return null;
+  }
+}
+
+/**
+ * Keep the draft (or remove it when empty).
+ * @param {Pick<Storage, 'setItem' | 'removeItem'> | null} storage @param {string | null} user
+ * @param {Record<string, string>} values @param {number} now
+ */
+export function storeDraft(storage, user, values, now) {
+  try {
+    if (!Object.keys(values).length) storage?.removeItem(draftKey(user));
+    else storage?.setItem(draftKey(user), JSON.stringify({ values, savedAt: now }));
+  } catch {
+    /* storage full or disabled: the draft lives only in the page */
+  }
+}

@@ -1,0 +1,72 @@
+import { describe, it, expect } from 'vitest';
+import { paramDef, byCategory, validate, diff, problems, fieldErrors, loadDraft, storeDraft, draftKey } from '../../../src/lib/features/parameters/logic.js';
+
+const defs = [
+  paramDef({ id: 'approach_height', category: 'Motion', label: 'Approach height', type: 'float', unit: 'mm', has_min: true, min: 5, has_max: true, max: 200, value: '50', default_value: '50' }),
+  paramDef({ id: 'parts', category: 'Process', label: 'Parts per cycle', type: 'int', has_min: true, min: 1, has_max: true, max: 20, value: '3', default_value: '3' }),
+  paramDef({ id: 'verify', category: 'Process', label: 'Verify placement', type: 'bool', value: 'true', default_value: 'true' }),
+  paramDef({ id: 'gripper', category: 'Motion', label: 'Gripper type', type: 'enum', options: ['two-finger', 'vacuum'], value: 'two-finger' }),
+  paramDef({ id: 'recipe', category: 'Process', label: 'Recipe name', type: 'string', value: 'demo' }),
+];
+
+describe('parameter definitions', () => {
+  it('groups by category in first-seen order and keeps limits only where the node set them', () => {
+    expect(byCategory(defs).map((g) => [g.category, g.items.map((d) => d.id)])).toEqual([
+      ['Motion', ['approach_height', 'gripper']], ['Process', ['parts', 'verify', 'recipe']],
+    ]);
+    expect(defs[2].min).toBeNull();
+    expect(defs[0].max).toBe(200);
+  });
+});
+
+describe('validation in place', () => {
+  it('names the field, the value and the limit with its unit', () => {
+    expect(validate(defs[0], '250')).toBe('Approach height: 250 mm is above the maximum 200 mm');
+    expect(validate(defs[0], '1')).toBe('Approach height: 1 mm is below the minimum 5 mm');
+    expect(validate(defs[0], 'abc')).toBe("Approach height: 'abc' is not a number");
+    expect(validate(defs[0], '12.5')).toBe('');
+    expect(validate(defs[0], '1e2')).toBe('');
+    expect(validate(defs[1], '2.5')).toBe("Parts per cycle: '2.5' is not a whole number");
+    expect(validate(defs[1], '21')).toMatch(/above the maximum 20/);
+    expect(validate(defs[2], 'yes')).toBe("Verify placement: 'yes' is not true or false");
+    expect(validate(defs[3], 'magnet')).toBe("Gripper type: 'magnet' is not one of two-finger, vacuum");
+    expect(validate(defs[4], 'a,b "c"')).toBe('');
+    expect(validate(defs[4], 'a\u0001b')).toMatch(/control characters/);
+    expect(validate(defs[4], 'x'.repeat(201))).toBe('Recipe name: at most 200 characters');
+    const short = paramDef({ id: 's', label: 'Short', type: 'string', max_length: 3 });
+    expect(validate(short, 'abcd')).toBe('Short: at most 3 characters');
+    const tenth = paramDef({ id: 'f', label: 'Force', type: 'float', decimals: 1 });
+    expect(validate(tenth, '12.34')).toBe('Force: at most 1 digit after the point');
+    expect(validate(tenth, '12.30')).toBe('');
+  });
+});
+
+describe('the diff before Save', () => {
+  it('lists only values that differ from the saved ones, trimmed for numbers', () => {
+    const draft = { approach_height: ' 60 ', parts: '3.0', recipe: 'demo ' };
+    expect(diff(defs, draft)).toEqual([
+      { id: 'approach_height', label: 'Approach height', unit: 'mm', from: '50', to: '60' },
+      { id: 'recipe', label: 'Recipe name', unit: '', from: 'demo', to: 'demo ' },
+    ]);
+    expect(problems(defs, { parts: 'x', verify: 'true' })).toEqual({ parts: "Parts per cycle: 'x' is not a whole number" });
+  });
+  it('reads the node\'s per-field errors', () => {
+    expect(fieldErrors({ errors: [{ id: 'parts', message: 'too many' }] })).toEqual({ parts: 'too many' });
+    expect(fieldErrors({})).toEqual({});
+  });
+});
+
+describe('the local draft', () => {
+  it('survives a reload per user, and is removed when empty', () => {
+    /** @type {Map<string, string>} */
+    const m = new Map();
+    const storage = { getItem: (/** @type {string} */ k) => m.get(k) ?? null, setItem: (/** @type {string} */ k, /** @type {string} */ v) => void m.set(k, v), removeItem: (/** @type {string} */ k) => void m.delete(k) };
+    storeDraft(storage, 'alice', { parts: '4' }, 1000);
+    expect(loadDraft(storage, 'alice')).toEqual({ values: { parts: '4' }, savedAt: 1000 });
+    expect(loadDraft(storage, 'bob')).toBeNull();
+    storeDraft(storage, 'alice', {}, 2000);
+    expect(m.has(draftKey('alice'))).toBe(false);
+    m.set(draftKey('alice'), '{not json');
+    expect(loadDraft(storage, 'alice')).toBeNull();
+  });
+});

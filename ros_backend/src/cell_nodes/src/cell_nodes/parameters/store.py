@@ -1,0 +1,152 @@
+"""The node's state: the definitions, the values in use, what was wrong with the file, and the all-or-nothing set.
+
+The file stays the truth: before each get and set (and on the node's timer) the store re-reads it when its size,
+mtime or inode changed, so a hand edit shows up without a restart.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Iterable, Optional, Sequence
+
+from .config import ParametersConfig
+from .csvfile import BACKUPS, read_csv, render, write_csv
+from .values import InvalidValue, ParamDef, Value, canonical, typed
+
+Signature = Optional[tuple[int, int, int]]
+
+
+@dataclass(frozen=True)
+class Entry:
+    defn: ParamDef
+    text: str
+
+
+@dataclass(frozen=True)
+class SetResult:
+    success: bool
+    message: str
+    errors: tuple[tuple[str, str], ...] = ()          # (id, message) per refused field
+    changed: tuple[tuple[str, str, str], ...] = ()    # (id, old text, new text) per saved change
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+class ParameterStore:
+    def __init__(self, config: ParametersConfig, path: str, backups: int = BACKUPS) -> None:
+        self.config = config
+        self.path = path
+        self.name = config.csv          # how messages name the file (the absolute path stays in the log)
+        self.backups = backups
+        self.defs: tuple[ParamDef, ...] = config.items
+        self._by_id = config.by_id()
+        self.texts: dict[str, str] = {d.id: d.default for d in self.defs}
+        self.problems: list[str] = []
+        self._signature: Signature = None
+        self._loaded = False
+
+    # ---------------------------------------------------------------------------------------------- reading
+    def _stat(self) -> Signature:
+        try:
+            st = os.stat(self.path)
+        except OSError:
+            return None
+        return (st.st_ino, st.st_size, st.st_mtime_ns)
+
+    def start(self) -> list[str]:
+        """Load the file; a missing one is created from the defaults. Returns notes for the log."""
+        return self._load(creating_from="the defaults")
+
+    def refresh(self) -> tuple[bool, list[str]]:
+        """Re-read the file if it changed on disk. Returns (the values or problems changed, notes for the log)."""
+        if self._loaded and self._stat() == self._signature and self._signature is not None:
+            return False, []
+        before = (dict(self.texts), list(self.problems))
+        # Deleted while running: written again from the values in use (a restart would take the defaults).
+        notes = self._load(creating_from="the values in use")
+        return (dict(self.texts), list(self.problems)) != before, notes
+
+    def _load(self, creating_from: str) -> list[str]:
+        notes: list[str] = []
+        signature = self._stat()
+        result = read_csv(self.path, self.defs, self.name)
+        if result.missing:
+            texts = self.texts if self._loaded else {d.id: d.default for d in self.defs}
+            try:
+                write_csv(self.path, render(self.defs, texts), self.backups)
+            except OSError as e:
+                self.texts, self.problems = dict(texts), [f"could not create {self.name}: {e.strerror or e}; "
+                                                          "the values are not saved"]
+                self._signature, self._loaded = None, True
+                return notes
+            notes.append(f"{self.name} did not exist: created from {creating_from}")
+            self.texts, self.problems = dict(texts), []
+            signature = self._stat()
+        else:
+            self.texts, self.problems = result.texts, result.problems
+        self._signature, self._loaded = signature, True
+        return notes
+
+    def entries(self) -> list[Entry]:
+        return [Entry(d, self.texts[d.id]) for d in self.defs]
+
+    def values(self) -> dict[str, Value]:
+        return {d.id: typed(d, self.texts[d.id]) for d in self.defs}
+
+    @property
+    def message(self) -> str:
+        """What get answers and the topic carries: what is wrong with the file, "" when nothing (the page shows a
+        non-empty message as a warning)."""
+        if not self.problems:
+            return ""
+        return f"{_plural(len(self.problems), 'problem')} in {self.name}: {'; '.join(self.problems)}"
+
+    # ---------------------------------------------------------------------------------------------- writing
+    def validate(self, changes: Sequence[tuple[str, str]]) -> tuple[dict[str, str], list[tuple[str, str]]]:
+        """Every change checked, every bad one listed: ({id: canonical text}, [(id, message)])."""
+        accepted: dict[str, str] = {}
+        errors: list[tuple[str, str]] = []
+        seen: set[str] = set()
+        for pid, text in changes:
+            defn = self._by_id.get(pid)
+            if defn is None:
+                errors.append((pid, f"unknown parameter {pid!r}"))
+                continue
+            if pid in seen:
+                errors.append((pid, f"{defn.label}: changed twice in one request"))
+                accepted.pop(pid, None)
+                continue
+            seen.add(pid)
+            try:
+                accepted[pid] = canonical(defn, text)[0]
+            except InvalidValue as e:
+                errors.append((pid, str(e)))
+        return accepted, errors
+
+    def set(self, changes: Iterable[tuple[str, str]]) -> SetResult:
+        """All or nothing: one bad field and nothing is written. Changes equal to the value in use (`50.0` for
+        `50`) are not changes. The file is backed up, then replaced atomically."""
+        changes = list(changes)
+        limit = max(100, 2 * len(self.defs))
+        if len(changes) > limit:
+            return SetResult(False, f"too many changes in one request ({len(changes)}, at most {limit}); "
+                                    "nothing saved")
+        self.refresh()  # a hand edit since the last read is kept, not overwritten by stale values
+        accepted, errors = self.validate(changes)
+        if errors:
+            return SetResult(False, f"nothing saved: {_plural(len(errors), 'invalid value')}: "
+                                    f"{'; '.join(m for _, m in errors)}", tuple(errors))
+        changed = tuple((pid, self.texts[pid], text) for pid, text in accepted.items()
+                        if typed(self._by_id[pid], text) != typed(self._by_id[pid], self.texts[pid]))
+        if not changed:
+            return SetResult(True, "nothing to save: no value differs from the saved one")
+        texts = dict(self.texts)
+        texts.update({pid: new for pid, _, new in changed})
+        try:
+            write_csv(self.path, render(self.defs, texts), self.backups)
+        except OSError as e:
+            return SetResult(False, f"could not save {self.name}: {e.strerror or e}; nothing saved")
+        self.texts, self.problems, self._signature = texts, [], self._stat()
+        return SetResult(True, f"saved {_plural(len(changed), 'parameter')}", (), changed)

@@ -1,0 +1,253 @@
+"""The UI's side of the process (the client node's logic, no ROS): what Start, Step, Stop, Pause, Resume and dry run
+do before anything goes to the action server, the published state built from the server's feedback and results,
+the part-cycle counter, "at the start configuration", and the log history.
+
+- One run at a time: Start and Step are refused while a run is active (or while the server is not there, the cell
+  is in alarm, or the section is unusable), each with a message the page shows as is.
+- The cycle counter: a run starts at the cycle after the last completed one (pose tables pick their entry by it);
+  an interrupted cycle is not counted, so the next Start repeats it. Running the last operation alone (Step)
+  completes a cycle too. The counter starts at 1 when the node starts.
+"""
+from __future__ import annotations
+
+import time
+from collections import deque
+from dataclasses import dataclass
+from typing import Callable, Optional, Sequence
+
+from .config import ProcessConfig
+from .executor import ACTIVE_STATES, ERROR, IDLE, PAUSED, RUNNING, STOPPING, Progress, RunRequest, RunResult
+
+LOG_SIZE = 200
+
+
+@dataclass(frozen=True)
+class LogLine:
+    stamp: float
+    level: str      # info, warning, error
+    text: str
+
+
+class LogBook:
+    """The last LOG_SIZE lines, newest last."""
+
+    def __init__(self, size: int = LOG_SIZE) -> None:
+        self.lines: deque[LogLine] = deque(maxlen=size)
+        self.added = 0      # lines ever added: the node republishes when this changes
+
+    def add(self, level: str, text: str, stamp: float) -> None:
+        self.lines.append(LogLine(stamp, level if level in ("info", "warning", "error") else "info", text))
+        self.added += 1
+
+    def entries(self) -> list[LogLine]:
+        return list(self.lines)
+
+
+@dataclass
+class StateView:
+    """The fields of cell_msgs/ProcessState (without the header)."""
+    state: str
+    ready: bool
+    operations: list[str]
+    current: int
+    step: str
+    step_index: int
+    step_count: int
+    dry_run: bool
+    run_mode: str
+    cycle: int
+    cycles_target: int
+    cycles_done: int
+    cycle_time_s: float
+    last_cycle_s: float
+    at_start: bool
+    start_configuration: str
+    message: str
+
+
+class ProcessClient:
+    def __init__(self, config: Optional[ProcessConfig], config_error: str = "",
+                 clock: Callable[[], float] = time.time, alarm_mode: str = "alarm") -> None:
+        self.config = config
+        self.config_error = config_error
+        self.clock = clock
+        self.alarm_mode = alarm_mode
+        self.log = LogBook()
+        self.ready = False
+        self.mode: Optional[str] = None
+        self.joints: Optional[list[float]] = None
+        self.dry_run = False
+        self.next_cycle = 1
+        self.run: Optional[RunRequest] = None        # the goal sent and not ended yet
+        self.state = IDLE
+        self.current = -1
+        self.step = ""
+        self.step_index = -1
+        self.step_count = 0
+        self.run_mode = ""
+        self.cycle = 1
+        self.cycles_target = 0
+        self.cycles_done = 0
+        self.cycle_start = 0.0
+        self.last_cycle_s = 0.0
+        self.message = config_error or "ready"
+        if config_error:
+            self.state = ERROR
+
+    # ------------------------------------------------------------------------------------------- inputs
+    @property
+    def operations(self) -> list[str]:
+        return self.config.names if self.config else []
+
+    @property
+    def active(self) -> bool:
+        return self.run is not None
+
+    def note(self, level: str, text: str, stamp: Optional[float] = None) -> None:
+        self.log.add(level, text, self.clock() if stamp is None else stamp)
+
+    def on_mode(self, mode: str) -> None:
+        self.mode = mode
+
+    def on_joints(self, positions: Sequence[float]) -> None:
+        self.joints = list(positions)
+
+    def at_start(self) -> bool:
+        """The robot stands at start_configuration (every joint of the group within the tolerance). True when the
+        section names none (nothing to confirm); False while the joints are unknown."""
+        cfg = self.config
+        if cfg is None or not cfg.start_configuration:
+            return True
+        if self.joints is None or not cfg.start_indices or max(cfg.start_indices) >= len(self.joints):
+            return False
+        return all(abs(self.joints[i] - v) <= cfg.start_tolerance for i, v in zip(cfg.start_indices,
+                                                                                  cfg.start_joints))
+
+    # ------------------------------------------------------------------------------------------- commands
+    def _refusal(self) -> Optional[str]:
+        if self.config is None:
+            return f"the process cannot run: {self.config_error}"
+        if self.active:
+            return ("the process is paused: resume or stop it" if self.state == PAUSED
+                    else "the process is already running: stop it first")
+        if self.mode == self.alarm_mode:
+            return "the cell is in alarm: reset it first"
+        if not self.ready:
+            return "the process server is not running (its action server does not answer)"
+        return None
+
+    def start(self, cycles: int) -> tuple[Optional[RunRequest], str]:
+        """Start: the request to send, or None and why not."""
+        why = self._refusal()
+        if why is not None:
+            self.note("warning", f"Start refused: {why}")
+            return None, why
+        return self._begin(RunRequest(-1, int(cycles), self.dry_run, self.next_cycle), "cycle")
+
+    def step_request(self, index: int) -> tuple[Optional[RunRequest], str]:
+        why = self._refusal()
+        if why is None and not 0 <= index < len(self.operations):
+            names = ", ".join(f"{i} {n}" for i, n in enumerate(self.operations))
+            why = f"no operation {index} (the process has {len(self.operations)}: {names})"
+        if why is not None:
+            self.note("warning", f"Step refused: {why}")
+            return None, why
+        return self._begin(RunRequest(index, 1, self.dry_run, self.next_cycle), "step")
+
+    def _begin(self, req: RunRequest, mode: str) -> tuple[RunRequest, str]:
+        self.run = req
+        self.run_mode = mode
+        self.state = RUNNING
+        self.current, self.step, self.step_index, self.step_count = -1, "", -1, 0
+        self.cycle, self.cycles_target, self.cycles_done = req.first_cycle, req.cycles, 0
+        self.cycle_start = self.clock()
+        self.message = "starting"
+        return req, "starting"
+
+    def set_dry_run(self, on: bool) -> tuple[bool, str]:
+        if self.active:
+            why = "the process is running: change the dry run once it is stopped"
+            self.note("warning", f"Dry run change refused: {why}")
+            return False, why
+        if on == self.dry_run:
+            return True, f"dry run is already {'on' if on else 'off'}"
+        self.dry_run = on
+        text = ("dry run on: the process walks its steps without moving the robot" if on
+                else "dry run off: the process moves the robot")
+        self.note("info", text[:1].upper() + text[1:])
+        return True, text
+
+    def stop_request(self) -> tuple[bool, str]:
+        """Stop: True when a goal must be canceled; else the answer for the caller."""
+        if not self.active:
+            return False, "the process is not running"
+        self.state = STOPPING
+        return True, "stopping"
+
+    # ------------------------------------------------------------------------------------------- server events
+    def on_feedback(self, fb: Progress) -> None:
+        if not self.active:
+            return  # late feedback of a run that has ended
+        if self.state == STOPPING and fb.state != STOPPING:
+            pass    # the cancel is on its way: keep showing stopping
+        elif fb.state in ACTIVE_STATES:
+            self.state = fb.state
+        self.current, self.step_index, self.step_count, self.step = fb.operation, fb.step_index, fb.step_count, fb.step
+        self.cycle, self.cycles_done = fb.cycle or self.cycle, fb.cycles_done
+        if fb.cycle_start:
+            self.cycle_start = fb.cycle_start
+        if fb.last_cycle_s:
+            self.last_cycle_s = fb.last_cycle_s
+        if fb.message:
+            self.message = fb.message
+
+    def on_rejected(self, why: str) -> None:
+        """The server refused the goal (it re-checks: another client may run, the mode may have changed); its log
+        line comes from the server."""
+        if self.run is None:
+            return
+        self.run = None
+        self.state, self.run_mode, self.message = IDLE, "", why
+
+    def on_result(self, result: RunResult) -> None:
+        req = self.run
+        if req is None:
+            return
+        self.run = None
+        self.cycles_done = result.cycles_done
+        if result.last_cycle_s:
+            self.last_cycle_s = result.last_cycle_s
+        if req.operation < 0:
+            self.next_cycle = req.first_cycle + result.cycles_done
+        elif result.success and req.operation == len(self.operations) - 1:
+            self.next_cycle = req.first_cycle + 1   # the last operation run alone completes the cycle
+        self.cycle = self.next_cycle
+        self.message = result.message or ("stopped" if result.stopped else "")
+        self.run_mode = ""
+        self.cycle_start = 0.0
+        if result.state == ERROR:
+            self.state = ERROR
+            self.current, self.step_index, self.step = result.operation, result.step_index, result.step
+        else:
+            self.state = IDLE
+            self.current, self.step, self.step_index, self.step_count = -1, "", -1, 0
+
+    def on_lost(self, why: str) -> None:
+        """The server went away during a run (its result will never come)."""
+        if self.run is None:
+            return
+        self.on_result(RunResult(False, why, ERROR, False, self.cycles_done, self.last_cycle_s, self.current,
+                                 self.step_index, self.step))
+        self.note("error", f"Error: {why}")
+
+    # ------------------------------------------------------------------------------------------- output
+    def view(self) -> StateView:
+        now = self.clock()
+        cfg = self.config
+        return StateView(
+            state=self.state, ready=self.ready, operations=self.operations, current=self.current, step=self.step,
+            step_index=self.step_index, step_count=self.step_count, dry_run=self.dry_run, run_mode=self.run_mode,
+            cycle=self.cycle, cycles_target=self.cycles_target, cycles_done=self.cycles_done,
+            cycle_time_s=max(0.0, now - self.cycle_start) if self.active and self.cycle_start else 0.0,
+            last_cycle_s=self.last_cycle_s, at_start=self.at_start(),
+            start_configuration=cfg.start_configuration if cfg else "", message=self.message)

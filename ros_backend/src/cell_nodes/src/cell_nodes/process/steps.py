@@ -1,0 +1,73 @@
+"""What a step says (its text for the page and the log) and where a pose step goes in a given cycle."""
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+from cell_nodes.manual.frames import relative_target
+
+from .config import MoveNamed, MovePose, MoveRelative, Routine, Step, Tool, WaitTime, WaitTopic
+
+AXES = ("x", "y", "z", "rx", "ry", "rz")
+CONDITION_SIGNS = {"equals": "=", "above": ">", "below": "<"}
+
+
+def table_index(cycle: int, length: int) -> int:
+    """The pose-table entry (0-based) cycle `cycle` (1-based) uses: the table repeats after its last entry."""
+    return (max(cycle, 1) - 1) % length
+
+
+def _num(v: float) -> str:
+    return f"{round(v, 4):g}"
+
+
+def _value(v: object) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return _num(v)
+    return str(v)
+
+
+def describe(step: Step, cycle: int, poses: Mapping[str, Sequence[Sequence[float]]]) -> str:
+    """The step's text: its own `text` if the cell file gives one ({n}: the pose-table entry's number)."""
+    n = table_index(cycle, len(poses[step.table])) + 1 if isinstance(step, MovePose) and step.table else 0
+    if step.text:
+        return step.text.replace("{n}", str(n)) if n else step.text
+    note = f" ({step.note})" if getattr(step, "note", "") else ""
+    if isinstance(step, MoveNamed):
+        return f"Move to {step.name}"
+    if isinstance(step, MoveRelative):
+        parts = [f"{a} {v:+g}{' m' if i < 3 else ' rad'}" for i, (a, v) in enumerate(zip(AXES, step.offset)) if v]
+        frame = " (tool)" if step.frame == "tool" else ""
+        return f"Move relative {', '.join(parts) or '0'}{frame}{note}"
+    if isinstance(step, MovePose):
+        if step.table:
+            return f"Move to {step.table} {n}{note}"
+        x, y, z = (_num(v) for v in step.pose[:3])
+        return f"Move to pose (x {x}, y {y}, z {z}){note}"
+    if isinstance(step, Tool):
+        return f"{step.tool[:1].upper()}{step.tool[1:]} {step.action}"
+    if isinstance(step, WaitTime):
+        return f"Wait {_num(step.seconds)} s"
+    if isinstance(step, WaitTopic):
+        return f"Wait for {step.topic} {step.field} {CONDITION_SIGNS[step.condition]} {_value(step.value)}"
+    if isinstance(step, Routine):
+        return f"Run routine {step.name}"
+    raise TypeError(f"not a step: {step!r}")
+
+
+def resolve_pose(step: MovePose, cycle: int, poses: Mapping[str, Sequence[Sequence[float]]]) -> list[float]:
+    """The absolute TCP pose of a move_pose step in this cycle: the literal pose or the table's entry, then the
+    offset in the base frame (translation along the base axes; rotation about base-parallel axes through the TCP,
+    like the driver's relative moves in frame base)."""
+    if step.table:
+        table = poses[step.table]
+        base = list(table[table_index(cycle, len(table))])
+    else:
+        base = list(step.pose or ())
+    off = step.offset
+    if not off or not any(off):
+        return base
+    if not any(off[3:]):  # a pure translation: keep the taught rotation vector exactly as written
+        return [base[0] + off[0], base[1] + off[1], base[2] + off[2], *base[3:]]
+    return relative_target(base, off, "base")

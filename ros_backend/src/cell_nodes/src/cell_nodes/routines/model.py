@@ -1,0 +1,208 @@
+"""Routines and their steps, routine names, the checks a routine must pass to be saved or run, and the JSON file
+format. Every check returns a message the operator can act on; nothing here touches files or the robot."""
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from typing import Any, Optional, Sequence
+
+from .config import RoutinesConfig
+
+POSE, ACTION = "pose", "action"
+KINDS = (POSE, ACTION)
+MAX_NAME = 64
+MAX_STEPS = 1000
+FORMAT_VERSION = 1
+# ASCII only, by choice: the name is the file name, so it must mean the same on every file system (USB sticks,
+# backups) and have one spelling (no Unicode normalisation forms, no look-alike letters).
+_NAME_CHARS = re.compile(r"[A-Za-z0-9 _.\-]+")
+
+
+class RoutineError(Exception):
+    """A request that is refused; the message goes back to the caller as is."""
+
+
+@dataclass(frozen=True)
+class Step:
+    kind: str
+    pose: tuple[float, ...] = ()      # m, rad (rotation vector), base frame
+    joints: tuple[float, ...] = ()    # rad, the group's joints when recorded
+    tool: str = ""
+    action: str = ""
+
+
+@dataclass(frozen=True)
+class Routine:
+    name: str
+    group: str = ""
+    tool: str = ""
+    steps: tuple[Step, ...] = ()
+    modified: float = 0.0             # the file's modification time (Unix s); 0 when unknown
+    error: str = ""                   # why the file cannot be read or run; "" when it can
+
+
+def _shown(name: str) -> str:
+    """The name for a message: quoted, control characters escaped, long names cut."""
+    return repr(name if len(name) <= 80 else name[:77] + "...")
+
+
+def name_problem(name: Any) -> Optional[str]:
+    """Why `name` cannot be a routine name, or None: 1-64 ASCII letters, digits, space, - _ . ; not starting with a
+    dot (hidden files, `.`/`..`) and not starting or ending with a space."""
+    if not isinstance(name, str):
+        return f"a routine name must be text, got {type(name).__name__}"
+    if not name:
+        return "a routine needs a name"
+    if len(name) > MAX_NAME:
+        return f"routine name {_shown(name)} is too long ({len(name)} characters, at most {MAX_NAME})"
+    if not _NAME_CHARS.fullmatch(name):
+        return f"invalid routine name {_shown(name)}: use letters, digits, space, - _ ."
+    if name.startswith("."):
+        return f"invalid routine name {_shown(name)}: it must not start with a dot"
+    if name != name.strip(" "):
+        return f"invalid routine name {_shown(name)}: it must not start or end with a space"
+    return None
+
+
+def check_name(name: Any) -> str:
+    problem = name_problem(name)
+    if problem:
+        raise RoutineError(problem)
+    return name
+
+
+def _finite(values: Sequence[Any]) -> bool:
+    return all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values)
+
+
+def format_pose(pose: Sequence[float]) -> str:
+    """`x 412.3, y -120.0, z 230.5 mm, rx 3.142, ry 0.000, rz 0.000 rad` (+ 0.0: no "-0.0")."""
+    x, y, z, rx, ry, rz = (float(v) + 0.0 for v in pose)
+    return (f"x {x * 1000 + 0.0:.1f}, y {y * 1000 + 0.0:.1f}, z {z * 1000 + 0.0:.1f} mm, "
+            f"rx {round(rx, 3) + 0.0:.3f}, ry {round(ry, 3) + 0.0:.3f}, rz {round(rz, 3) + 0.0:.3f} rad")
+
+
+def describe(step: Step) -> str:
+    """A step for the log and the run state: `pose x 412.3, y -120.0, z 230.5 mm` or `gripper close`."""
+    if step.kind == POSE:
+        x, y, z = (float(v) * 1000 + 0.0 for v in step.pose[:3])
+        return f"pose x {x:.1f}, y {y:.1f}, z {z:.1f} mm"
+    return f"{step.tool} {step.action}"
+
+
+def check_group(config: RoutinesConfig, group: str) -> None:
+    if not group:
+        raise RoutineError(f"a routine needs a motion group (routines.groups: {config.group_names()})")
+    if group not in config.groups:
+        raise RoutineError(f"unknown motion group {_shown(group)} for routines (routines.groups: "
+                           f"{config.group_names()})")
+
+
+def check_tool_action(config: RoutinesConfig, tool: str, action: str) -> None:
+    if not tool:
+        raise RoutineError(f"a tool action needs a tool (routines.tools: {config.tool_names()})")
+    if tool not in config.tools:
+        raise RoutineError(f"unknown tool {_shown(tool)} for routines (routines.tools: {config.tool_names()})")
+    actions = config.tools[tool]
+    if action not in actions:
+        raise RoutineError(f"unknown action {_shown(action)} for tool {tool} (it has: {', '.join(actions) or 'none'})")
+
+
+def _step_shape(step: Step, group_joints: Optional[int]) -> Step:
+    """The step's own form (kind, numbers), normalised: a pose keeps pose and joints, an action tool and action."""
+    if step.kind == POSE:
+        if len(step.pose) != 6 or not _finite(step.pose):
+            raise RoutineError(f"a pose needs 6 finite numbers (x, y, z in m, rx, ry, rz in rad), got "
+                               f"{len(step.pose)} values" + ("" if _finite(step.pose) else " (not all finite)"))
+        if step.joints and not _finite(step.joints):
+            raise RoutineError("joints must be finite numbers (rad)")
+        if step.joints and group_joints is not None and len(step.joints) != group_joints:
+            raise RoutineError(f"joints must be empty or the group's {group_joints} joint positions, got "
+                               f"{len(step.joints)} values")
+        return Step(POSE, tuple(float(v) for v in step.pose), tuple(float(v) for v in step.joints))
+    if step.kind == ACTION:
+        if not isinstance(step.tool, str) or not isinstance(step.action, str) or not step.action:
+            raise RoutineError("an action step needs an action (one of the tool's actions)")
+        return Step(ACTION, tool=step.tool, action=step.action)
+    raise RoutineError(f"unknown step kind {_shown(str(step.kind))} (pose or action)")
+
+
+def checked(config: RoutinesConfig, name: str, group: str, tool: str, steps: Sequence[Step]) -> Routine:
+    """The routine as it is saved (action steps carry their tool), or RoutineError saying what is wrong."""
+    check_name(name)
+    check_group(config, group)
+    if tool and tool not in config.tools:
+        raise RoutineError(f"unknown tool {_shown(tool)} for routines (routines.tools: {config.tool_names()})")
+    if not steps:
+        raise RoutineError("a routine needs at least one step")
+    if len(steps) > MAX_STEPS:
+        raise RoutineError(f"too many steps ({len(steps)}, at most {MAX_STEPS})")
+    out = []
+    for i, step in enumerate(steps, 1):
+        try:
+            s = _step_shape(step, config.groups[group])
+            if s.kind == ACTION:
+                s = Step(ACTION, tool=s.tool or tool, action=s.action)
+                check_tool_action(config, s.tool, s.action)
+        except RoutineError as e:
+            raise RoutineError(f"step {i}: {e}") from None
+        out.append(s)
+    return Routine(name, group, tool, tuple(out))
+
+
+def runnable_problem(config: RoutinesConfig, routine: Routine) -> str:
+    """Why a routine read from its file cannot run with this cell file ("" when it can)."""
+    try:
+        checked(config, routine.name, routine.group, routine.tool, routine.steps)
+    except RoutineError as e:
+        return f"cannot run with this cell file: {e}"
+    return ""
+
+
+# ================================================================ the file format
+def encode(routine: Routine) -> bytes:
+    """The file's content: the name is the file's name, not repeated inside (one source of truth on rename)."""
+    steps: list[dict[str, Any]] = []
+    for s in routine.steps:
+        if s.kind == POSE:
+            steps.append({"kind": POSE, "pose": list(s.pose), "joints": list(s.joints)})
+        else:
+            steps.append({"kind": ACTION, "tool": s.tool, "action": s.action})
+    doc = {"version": FORMAT_VERSION, "group": routine.group, "tool": routine.tool, "steps": steps}
+    return (json.dumps(doc, indent=2, allow_nan=False) + "\n").encode("utf-8")
+
+
+def decode(name: str, data: bytes, modified: float = 0.0) -> Routine:
+    """A routine from its file's bytes; RoutineError says what is wrong with the file (not with the cell)."""
+    try:
+        doc = json.loads(data.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise RoutineError("the file is not UTF-8 text") from None
+    except json.JSONDecodeError as e:
+        raise RoutineError(f"the file is not valid JSON ({e.msg} at line {e.lineno}, column {e.colno})") from None
+    if not isinstance(doc, dict):
+        raise RoutineError("the file is not a routine (expected a JSON object)")
+    if doc.get("version") != FORMAT_VERSION:
+        raise RoutineError(f"unsupported routine file version {doc.get('version')!r} (this node reads "
+                           f"{FORMAT_VERSION})")
+    group, tool, raw_steps = doc.get("group"), doc.get("tool", ""), doc.get("steps")
+    if not isinstance(group, str) or not isinstance(tool, str):
+        raise RoutineError("the file's group and tool must be text")
+    if not isinstance(raw_steps, list):
+        raise RoutineError("the file has no list of steps")
+    steps: list[Step] = []
+    for i, raw in enumerate(raw_steps, 1):
+        if not isinstance(raw, dict):
+            raise RoutineError(f"step {i} in the file is not an object")
+        pose, joints = raw.get("pose", []), raw.get("joints", [])
+        s_tool, action = raw.get("tool", ""), raw.get("action", "")
+        if not isinstance(pose, list) or not isinstance(joints, list) or not isinstance(s_tool, str) \
+                or not isinstance(action, str) or not isinstance(raw.get("kind"), str):
+            raise RoutineError(f"step {i} in the file has fields of the wrong type")
+        try:
+            steps.append(_step_shape(Step(raw["kind"], tuple(pose), tuple(joints), s_tool, action), None))
+        except RoutineError as e:
+            raise RoutineError(f"step {i} in the file: {e}") from None
+    return Routine(name, group, tool, tuple(steps), modified)

@@ -1,0 +1,160 @@
+"""The parameters node end to end: roscore + `rosrun cell_nodes parameters_node` with the demo cell and a temporary
+DATA_DIR, used over ROS the way the BFF relays the page's calls: get (the CSV created from the defaults), a valid set
+(the CSV, the latched topic and get all have it), a set with one bad field (nothing written, the field named), a hand
+edit picked up, and a restart that reads the saved values."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import tempfile
+import threading
+from pathlib import Path
+from typing import Iterator
+
+import pytest
+import rospy
+import yaml
+
+from conftest import wait_for
+
+CELL = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
+RECIPE = 'Bügel, "links" ✓'
+
+
+class Values:
+    """Every /cell/parameters/values message, as {id: value}."""
+
+    def __init__(self) -> None:
+        from cell_msgs.msg import ParameterValues
+        self.history: list[dict[str, str]] = []
+        self.messages: list[str] = []
+        self._lock = threading.Lock()
+        self.sub = rospy.Subscriber("/cell/parameters/values", ParameterValues, self._cb, queue_size=20)
+
+    def _cb(self, msg) -> None:
+        with self._lock:
+            self.history.append({p.id: p.value for p in msg.parameters})
+            self.messages.append(msg.message)
+
+    def last(self) -> dict[str, str]:
+        with self._lock:
+            return dict(self.history[-1]) if self.history else {}
+
+
+def _service_up(name: str) -> bool:
+    try:
+        rospy.wait_for_service(name, timeout=0.2)
+        return True
+    except rospy.ROSException:
+        return False
+
+
+def _start(data_dir: str, log) -> subprocess.Popen:
+    proc = subprocess.Popen(["rosrun", "cell_nodes", "parameters_node", f"_cell_config:={CELL}",
+                             "_check_period_s:=0.2", "__name:=parameters_test"],
+                            env=dict(os.environ, DATA_DIR=data_dir), stdout=log, stderr=subprocess.STDOUT,
+                            start_new_session=True)
+    wait_for(lambda: proc.poll() is None and _service_up("/cell/parameters/set"), 30, what="the node's services")
+    return proc
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait(5)
+
+
+@pytest.fixture(scope="module")
+def data_dir(roscore: str) -> Iterator[Path]:
+    if not rospy.core.is_initialized():
+        rospy.init_node("parameters_test_client", anonymous=True, disable_signals=True)
+    with tempfile.TemporaryDirectory(prefix="parameters-data-") as d:
+        yield Path(d)
+
+
+def test_get_set_refuse_hand_edit_and_restart(data_dir: Path) -> None:
+    from cell_msgs.msg import ParameterValue
+    from cell_msgs.srv import GetParameters, SetParameters
+
+    items = yaml.safe_load(CELL.read_text())["parameters"]["items"]
+    ids = [i["id"] for i in items]
+    csv = data_dir / "parameters.csv"
+    log = tempfile.NamedTemporaryFile("w+", prefix="parameters-node-", suffix=".log", delete=False)
+    proc = _start(str(data_dir), log)
+    try:
+        get = rospy.ServiceProxy("/cell/parameters/get", GetParameters)
+        set_ = rospy.ServiceProxy("/cell/parameters/set", SetParameters)
+
+        # --- get: every item with its definition; the CSV was created from the defaults
+        reply = get()
+        assert reply.success and reply.message == ""
+        assert [p.id for p in reply.parameters] == ids
+        by_id = {p.id: p for p in reply.parameters}
+        ah = by_id["approach_height"]
+        assert (ah.category, ah.label, ah.type, ah.unit, ah.value, ah.default_value) == \
+               ("Motion", "Approach height", "float", "mm", "50", "50")
+        assert (ah.has_min, ah.has_max, ah.min, ah.max, ah.decimals) == (True, True, 5.0, 200.0, 1)
+        assert list(by_id["gripper_type"].options) == ["parallel", "vacuum", "magnetic"]
+        assert by_id["verify_placement"].value == "true" and not by_id["verify_placement"].has_min
+        assert by_id["recipe_name"].max_length == 64 and by_id["parts_per_cycle"].decimals == -1
+        assert csv.read_text().startswith("id,value,unit,category,label\napproach_height,50,mm,Motion,")
+
+        values = Values()
+        wait_for(lambda: values.last().get("approach_height") == "50", 10, what="the latched values")
+
+        # --- a valid set: saved, on the topic, read back by get
+        reply = set_(changes=[ParameterValue(id="approach_height", value="60.5"),
+                              ParameterValue(id="recipe_name", value=RECIPE),
+                              ParameterValue(id="parts_per_cycle", value="3")])  # unchanged: not counted
+        assert (reply.success, reply.message, list(reply.errors)) == (True, "saved 2 parameters", [])
+        assert "approach_height,60.5,mm," in csv.read_text(encoding="utf-8")
+        assert '"Bügel, ""links"" ✓"' in csv.read_text(encoding="utf-8")
+        assert (data_dir / "parameters.csv.bak").exists()
+        wait_for(lambda: values.last().get("recipe_name") == RECIPE, 5, what="the new values on the topic")
+        assert values.last()["approach_height"] == "60.5"
+        got = {p.id: p.value for p in get().parameters}
+        assert got["approach_height"] == "60.5" and got["recipe_name"] == RECIPE
+
+        # --- one bad field: nothing written, the field named
+        before = csv.read_bytes()
+        published = len(values.history)
+        reply = set_(changes=[ParameterValue(id="approach_height", value="250"),
+                              ParameterValue(id="parts_per_cycle", value="4")])
+        assert not reply.success
+        assert [(e.id, e.message) for e in reply.errors] == \
+               [("approach_height", "Approach height: 250 mm is above the maximum 200 mm")]
+        assert reply.message == "nothing saved: 1 invalid value: Approach height: 250 mm is above the maximum 200 mm"
+        assert csv.read_bytes() == before
+        assert {p.id: p.value for p in get().parameters}["parts_per_cycle"] == "3"
+        reply = set_(changes=[ParameterValue(id="../../etc/passwd", value="x")])
+        assert not reply.success and reply.errors[0].message == "unknown parameter '../../etc/passwd'"
+        rospy.sleep(0.3)
+        assert len(values.history) == published  # nothing republished for a refusal
+
+        # --- a hand edit is picked up and published; a bad one is reported and its default used
+        csv.write_text(csv.read_text(encoding="utf-8").replace("parts_per_cycle,3,", "parts_per_cycle,7,")
+                       .replace("gripper_type,parallel,", "gripper_type,suction,"), encoding="utf-8")
+        wait_for(lambda: values.last().get("parts_per_cycle") == "7", 5, what="the hand edit on the topic")
+        reply = get()
+        assert reply.message == ("1 problem in parameters.csv: line 4: Gripper type: 'suction' is not one of "
+                                 "parallel, vacuum, magnetic; default 'parallel' used")
+        wait_for(lambda: values.messages[-1] == reply.message, 5, what="the problem on the topic")
+        assert {p.id: p.value for p in reply.parameters}["gripper_type"] == "parallel"
+    finally:
+        _stop(proc)
+
+    # --- a restart reads the saved values
+    proc = _start(str(data_dir), log)
+    try:
+        got = {p.id: p.value for p in get().parameters}
+        assert (got["approach_height"], got["recipe_name"], got["parts_per_cycle"]) == ("60.5", RECIPE, "7")
+    finally:
+        _stop(proc)
+        output = Path(log.name).read_text()
+        os.unlink(log.name)
+        assert "Traceback" not in output, output[-3000:]
+        assert "Gripper type: 'suction' is not one of" in output  # the node logged the warning
