@@ -13,7 +13,7 @@ import yaml
 
 from cell_nodes.process.client import LOG_SIZE, ProcessClient
 from cell_nodes.process.conditions import ConditionError, field_value, holds
-from cell_nodes.process.config import ConfigError, MovePose, parse_process
+from cell_nodes.process.config import ConfigError, MovePose, parse_cell_process, parse_process
 from cell_nodes.process.executor import (ERROR, IDLE, PAUSED, PAUSING, RUNNING, STOPPING, Executor, Progress,
                                          RunRequest, RunResult)
 from cell_nodes.process.mode import ModeFollower
@@ -215,7 +215,7 @@ class Harness:
 # ================================================================================================ section
 def test_demo_cell_section_parses_with_the_demo_manual_section() -> None:
     cell = yaml.safe_load((ROOT / "config" / "demo-cell.yaml").read_text())
-    cfg = parse_process(cell["process"], cell["manual"])
+    cfg = parse_cell_process(cell, {"approach_height": 100.0})
     assert cfg.action == "/cell/process/run" and cfg.start_configuration == "home"
     assert cfg.names == ["pick part", "place in fixture", "return home"]
     assert len(cfg.poses["part"]) == 3 and len(cfg.poses["pocket"]) == 3
@@ -764,3 +764,36 @@ def test_client_log_keeps_the_last_200_newest_last() -> None:
     lines = c.log.entries()
     assert len(lines) == LOG_SIZE and lines[0].text == "line 50" and lines[-1].text == "line 249"
     assert c.log.added == 250
+
+
+# ---- parameter references (the parameters CSV, read at start) ----
+
+def test_parameter_references_take_the_csv_values_scaled() -> None:
+    from cell_nodes.process.config import substitute_parameters, parse_cell_process
+    section = {"operations": [{"name": "a", "steps": [
+        {"move_relative": [0, 0, {"parameter": "h", "scale": 0.001}, 0, 0, 0]}, {"wait_s": {"parameter": "w"}}]}]}
+    out = substitute_parameters(section, {"h": 120.0, "w": 2})
+    assert out["operations"][0]["steps"][0]["move_relative"][2] == pytest.approx(0.12)
+    assert out["operations"][0]["steps"][1]["wait_s"] == 2.0
+    cfg = parse_cell_process({"process": section}, {"h": 50, "w": 0.5})
+    assert cfg.operations[0].steps[0].offset[2] == pytest.approx(0.05)
+
+
+def test_a_bad_parameter_reference_names_the_field() -> None:
+    from cell_nodes.process.config import ConfigError, substitute_parameters
+    section = {"operations": [{"steps": [{"wait_s": {"parameter": "nope"}}]}]}
+    with pytest.raises(ConfigError, match=r"process\.operations\[0\]\.steps\[0\]\.wait_s\.parameter: unknown parameter 'nope'"):
+        substitute_parameters(section, {"h": 1})
+    with pytest.raises(ConfigError, match="not a number"):
+        substitute_parameters({"x": {"parameter": "name"}}, {"name": "text"})
+
+
+def test_the_demo_cell_reads_its_approach_height_from_the_parameters_csv(tmp_path, monkeypatch) -> None:
+    from pathlib import Path
+    from cell_nodes.cell_file import load_cell
+    from cell_nodes.process.config import parse_cell_process
+    monkeypatch.setenv("DATA_DIR", str(tmp_path))
+    (tmp_path / "parameters.csv").write_text("id,value\napproach_height,80\n")
+    cell = load_cell(str(Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"))
+    approach = parse_cell_process(cell).operations[0].steps[2]
+    assert approach.offset[2] == pytest.approx(0.08)

@@ -370,3 +370,38 @@ def parse_process(section: Optional[Mapping[str, Any]], manual_section: Optional
         dry_run_step_s=opt("dry_run_step_s", positive=False) if "dry_run_step_s" in section
         else DEFAULT_DRY_RUN_STEP_S,
         status_fields=tuple(fields))
+
+
+def substitute_parameters(section: Any, values: Mapping[str, Any], where: str = "process") -> Any:
+    """The section with every `{parameter: id, scale?: k}` replaced by the parameter's value times k (the cell's
+    parameters CSV, read at start: cell_nodes.parameters.read_values). Raises ConfigError naming the field for an
+    unknown or non-numeric parameter."""
+    if isinstance(section, dict):
+        if "parameter" in section and set(section) <= {"parameter", "scale"}:
+            pid = section["parameter"]
+            if pid not in values:
+                known = ", ".join(sorted(values)) or "none"
+                raise ConfigError(f"{where}.parameter: unknown parameter {pid!r} (the cell's parameters: {known})")
+            value = values[pid]
+            scale = section.get("scale", 1)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or isinstance(scale, bool) \
+                    or not isinstance(scale, (int, float)):
+                raise ConfigError(f"{where}: parameter {pid!r} is not a number ({value!r}) or scale is not a number")
+            return float(value) * float(scale)
+        return {k: substitute_parameters(v, values, f"{where}.{k}") for k, v in section.items()}
+    if isinstance(section, list):
+        return [substitute_parameters(v, values, f"{where}[{i}]") for i, v in enumerate(section)]
+    return section
+
+
+def parse_cell_process(cell: Mapping[str, Any], values: Optional[Mapping[str, Any]] = None) -> ProcessConfig:
+    """The cell file's process with its parameter references resolved (values: the parameters CSV's, read by the
+    caller at start; None reads them here)."""
+    if values is None:
+        from cell_nodes.parameters import read_values  # the parameters feature is optional for a cell
+        try:
+            values = read_values(dict(cell))
+        except Exception:  # noqa: BLE001 - a bad parameters section is the parameters node's to report; a reference
+            values = {}   # to it then fails here with the field named
+
+    return parse_process(substitute_parameters(cell.get("process"), values), cell.get("manual"))
