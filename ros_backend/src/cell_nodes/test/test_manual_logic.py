@@ -458,7 +458,7 @@ def test_unknown_names_and_bad_arguments_are_refused(robot: FakeRobot, driver: M
     assert driver.move_named("arm", "dance") == (
         False, "unknown configuration 'dance' for group arm (it has: home, pick_approach)")
     assert driver.tool_action("laser", "fire") == (False, "unknown tool 'laser' (the cell has: gripper)")
-    assert driver.tool_action("gripper", "crush") == (False, "unknown action 'crush' for tool gripper (it has: open, close)")
+    assert driver.tool_action("gripper", "crush") == (False, "unknown action 'crush' for tool gripper (it has: open, close, check_part)")
     ok, why = driver.move_relative("arm", [0, 0, 0.05], "base")
     assert not ok and why.startswith("offset must be 6 numbers") and "got 3" in why
     assert driver.move_relative("arm", [0] * 6, "world") == (False, "unknown frame 'world' (base or tool)")
@@ -686,7 +686,7 @@ def test_stale_data_means_the_controller_is_gone(robot: FakeRobot) -> None:
 
 def test_groups_service_content(driver: ManualDriver) -> None:
     groups, tools, limits = driver.groups()
-    assert [g.name for g in groups] == ["arm"] and tools == [("gripper", ["open", "close"])]
+    assert [g.name for g in groups] == ["arm"] and tools == [("gripper", ["open", "close", "check_part"])]
     assert limits.as_dict() == {"default_speed": 0.25, "default_acceleration": 0.5, "max_speed": 1.0,
                                 "max_acceleration": 1.5, "max_tcp_speed": 0.25, "max_tcp_acceleration": 1.0,
                                 "jog_timeout": 0.2}

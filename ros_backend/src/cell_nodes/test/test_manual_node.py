@@ -108,7 +108,7 @@ def test_services_topics_and_a_jog_through_ros(node) -> None:
     groups = rospy.ServiceProxy("/cell/manual/groups", GetMotionGroups)()
     assert [g.name for g in groups.groups] == ["arm"] and list(groups.groups[0].joints) == UR_JOINTS
     assert [c.name for c in groups.groups[0].configurations] == ["home", "pick_approach"]
-    assert [(t.name, list(t.actions)) for t in groups.tools] == [("gripper", ["open", "close"])]
+    assert [(t.name, list(t.actions)) for t in groups.tools] == [("gripper", ["open", "close", "check_part"])]
     assert groups.limits.max_tcp_speed == 0.25 and groups.limits.jog_timeout == pytest.approx(0.2)
 
     move_named = rospy.ServiceProxy("/cell/manual/move_named", MoveNamed)

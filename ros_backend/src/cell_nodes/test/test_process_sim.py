@@ -125,12 +125,13 @@ def test_a_cycle_puts_the_first_cube_into_the_first_pocket_with_a_pause_in_it(en
     assert objects.msg.poses[0].position.z < 0.03          # the cube is still on the table, in the fingers
     r = ui.resume()
     assert (r.success, r.message) == (True, "resumed")
-    wait_for(lambda: ui.state.msg.step == "Lift the part", 5, what="the next step after the resume")
+    wait_for(lambda: ui.state.msg.step == "Check the part is in the gripper", 5, what="the next step after the resume")
     s = ui.wait_state("idle", 60)
     took = time.monotonic() - t0
     assert (s.message, s.cycles_done, s.cycle) == ("1 cycle done", 1, 2)
     assert 5 < s.last_cycle_s < took + 1
-    assert "Resumed: next 'Lift the part'" in ui.texts()
+    assert "Resumed: next 'Check the part is in the gripper'" in ui.texts()
+    assert "Lift the part" in ui.texts()                    # the part was there (DI2), the cycle went on
     assert ui.texts().count("Gripper close") == 1          # the paused step was not run again
     ui.wait_mode("idle")
     wait_for(lambda: ui.state.msg.at_start, 3, what="back at home")

@@ -96,7 +96,7 @@ def texts(log: LogBook) -> list[str]:
 # ================================================================ the cell file section
 def test_section_of_the_demo_cell() -> None:
     c = config()
-    assert c.directory == "routines" and c.groups == {"arm": 6} and c.tools == {"gripper": ("open", "close")}
+    assert c.directory == "routines" and c.groups == {"arm": 6} and c.tools == {"gripper": ("open", "close", "check_part")}
     assert c.speed == 0.1 and c.acceleration == 0.0 and c.warnings == ()
 
 
@@ -177,7 +177,7 @@ def test_checked_normalises_and_names_the_bad_step() -> None:
         (("pick2", "arm", "", [Step(POSE, P1, (0.0, 1.0))]),
          "step 1: joints must be empty or the group's 6 joint positions, got 2 values"),
         (("pick2", "arm", "gripper", [Step(POSE, P1), Step(ACTION, action="grab")]),
-         "step 2: unknown action 'grab' for tool gripper (it has: open, close)"),
+         "step 2: unknown action 'grab' for tool gripper (it has: open, close, check_part)"),
         (("pick2", "arm", "", [Step(ACTION, action="close")]),
          "step 1: a tool action needs a tool (routines.tools: gripper)"),
         (("pick2", "arm", "", [Step(ACTION, tool="drill", action="on")]),
@@ -370,7 +370,7 @@ def test_record_refusals(tmp_path: Path) -> None:
     assert r.record("legs", "", "pose", "") == (False, "unknown motion group 'legs' for routines (routines.groups: "
                                                        "arm)", None)
     assert r.record("arm", "gripper", "action", "grab") == (False, "unknown action 'grab' for tool gripper (it has: "
-                                                                   "open, close)", None)
+                                                                   "open, close, check_part)", None)
     assert r.record("arm", "drill", "action", "on") == (False, "unknown tool 'drill' for routines (routines.tools: "
                                                                "gripper)", None)
     assert r.record("arm", "", "wave", "") == (False, "unknown step kind 'wave' (pose or action)", None)
