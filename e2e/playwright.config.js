@@ -11,6 +11,10 @@ const chromium = {
   },
 };
 
+// Specs that drive /ros directly, move the robot, change files on the robot PC or check subscriptions with rostopic:
+// once, on the phone (they share one stack and its robot). Tablet and desktop run the shell and the wide layouts.
+const PHONE_ONLY = /(access|manual|modules|alarms|process|routines|parameters|sensors|video|database|audit)\.spec/;
+
 export default defineConfig({
   testDir: './tests',
   // The tests share one stack whose ROS state (mode, rosbridge process) they change: one at a time.
@@ -32,7 +36,7 @@ export default defineConfig({
     // The access checks drive /ros directly, and the hold-to-run pad is a thumb control: once, on the phone.
     // The wide layouts' own checks (the camera beside the controls) run on tablet and desktop.
     { name: 'phone', use: { ...devices['Pixel 7'], ...chromium }, testIgnore: /\.wide\.spec/ },
-    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium }, testIgnore: /access\.spec|manual\.spec|modules\.spec|alarms\.spec|process\.spec|routines\.spec|parameters\.spec/ },
-    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium }, testIgnore: /access\.spec|manual\.spec|modules\.spec|alarms\.spec|process\.spec|routines\.spec|parameters\.spec/ },
+    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium }, testIgnore: PHONE_ONLY },
+    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium }, testIgnore: PHONE_ONLY },
   ],
 });

@@ -1,7 +1,13 @@
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
 import { stackEnv, addUser, startStack } from './stack.js';
 
 export default async function globalSetup() {
   const port = Number(process.env.E2E_PORT || 18080);
+  // A directory stands for the robot PC's USB mount points (the database tests plug a "drive" in there).
+  const usbRoot = fs.mkdtempSync(path.join(os.tmpdir(), 'cell-usb-'));
+  process.env.USB_ROOTS = usbRoot;
   const env = stackEnv({
     port, masterPort: port + 1, rosbridgePort: port + 2, ...(process.env.E2E_UR_HOST ? { urHost: process.env.E2E_UR_HOST } : {}),
     // The simulated cell runs as under `npm start` (the manual-motion tests drive it through the real driver).

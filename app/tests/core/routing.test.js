@@ -10,9 +10,12 @@ describe('routing from the feature list', () => {
       ['modules', '/modules'],
       ['process', '/process'],
       ['manual', '/manual'],
+      ['sensors', '/sensors'],
+      ['video', '/video'],
       ['parameters', '/parameters'],
       ['routines', '/routines'],
       ['alarms', '/alarms'],
+      ['database', '/database'],
       ['system', '/system'],
     ]);
     expect(featureByPath('/system/')?.id).toBe('system');

@@ -1,23 +1,41 @@
-import { describe, it, expect, vi, afterEach } from 'vitest';
+import { describe, it, expect, vi, afterEach, beforeEach } from 'vitest';
 import { render, screen, fireEvent } from '@testing-library/svelte';
 import { flushSync } from 'svelte';
 import CameraView from '../../src/lib/ui/CameraView.svelte';
-import { imageSrc, imageMime, bytesToBase64, cameraStreams } from '../../src/lib/ui/camera.js';
+import {
+  imageSrc, imageMime, bytesToBase64, cameraStreams, frameBytes, LatestFrameDecoder, FrameStats, staleAfterMs, shortAge,
+  frameStatus, clampView, zoomAt, panView, pinchView, containRect, IDENTITY, ZOOM_MAX,
+} from '../../src/lib/ui/camera.js';
 
 const streams = [
   { name: 'Workbench', topic: '/cell/camera/workbench/image/compressed' },
   { name: 'Global view', topic: '/cell/camera/global/image/compressed' },
 ];
+const JPEG = new Uint8Array([0xff, 0xd8, 0xff, 0xe0, 1, 2, 3]);
 
-/** A subscribe() double: which topics are subscribed now, and a way to deliver to them. */
+/** A subscribe() double: which topics are subscribed now (with their options), and a way to deliver to them. */
 function fakeSubscribe() {
   /** @type {Map<string, (m: any) => void>} */
   const live = new Map();
-  const subscribe = vi.fn((/** @type {string} */ topic, /** @type {string} */ _type, /** @type {(m: any) => void} */ cb) => {
+  /** @type {Map<string, any>} */
+  const options = new Map();
+  const subscribe = vi.fn((/** @type {string} */ topic, /** @type {string} */ _type, /** @type {(m: any) => void} */ cb, /** @type {any} */ o) => {
     live.set(topic, cb);
+    options.set(topic, o);
     return () => live.delete(topic);
   });
-  return { live, subscribe };
+  return { live, options, subscribe };
+}
+
+/** A createImageBitmap double: resolves a fake bitmap per blob (and remembers the blobs). */
+function fakeDecode() {
+  /** @type {Blob[]} */
+  const blobs = [];
+  const decode = vi.fn(async (/** @type {Blob} */ b) => {
+    blobs.push(b);
+    return { width: 640, height: 480, close: vi.fn() };
+  });
+  return { blobs, decode };
 }
 
 /** @param {DocumentVisibilityState} v */
@@ -26,7 +44,13 @@ function setVisibility(v) {
   document.dispatchEvent(new Event('visibilitychange'));
 }
 
+const drawImage = vi.fn();
+beforeEach(() => {
+  drawImage.mockReset();
+  vi.spyOn(HTMLCanvasElement.prototype, 'getContext').mockImplementation(() => /** @type {any} */ ({ drawImage }));
+});
 afterEach(() => {
+  vi.useRealTimers();
   // @ts-ignore back to jsdom's own getter
   delete document.visibilityState;
 });
@@ -46,25 +70,163 @@ describe('camera.js', () => {
     expect(cameraStreams([{ name: 'A', topic: '/a' }, { topic: '/b' }, { name: 'C' }, null])).toEqual([{ name: 'A', topic: '/a' }, { name: '/b', topic: '/b' }]);
     expect(cameraStreams(undefined)).toEqual([]);
   });
+
+  it('frame bytes: CBOR bytes as they are (no copy), ints and base64 as a fallback', () => {
+    expect(frameBytes(JPEG)).toBe(JPEG);
+    expect([...(frameBytes('AAEC') ?? [])]).toEqual([0, 1, 2]);
+    expect([...(frameBytes([5, 6]) ?? [])]).toEqual([5, 6]);
+    expect(frameBytes('')).toBeNull();
+    expect(frameBytes(new Uint8Array(0))).toBeNull();
+    expect(frameBytes(undefined)).toBeNull();
+  });
+
+  it('decodes one frame at a time and draws only the newest of those that came meanwhile', async () => {
+    /** @type {((v: any) => void)[]} */
+    const pending = [];
+    const decode = vi.fn((/** @type {Blob} */ b) => new Promise((res) => pending.push(() => res({ id: b.size, close() {} }))));
+    const drawn = /** @type {any[]} */ ([]);
+    const d = new LatestFrameDecoder((bmp) => drawn.push(bmp.id), decode);
+    d.push(new Uint8Array(1), 'image/jpeg');
+    d.push(new Uint8Array(2), 'image/jpeg');
+    d.push(new Uint8Array(3), 'image/jpeg');
+    expect(decode).toHaveBeenCalledTimes(1);
+    pending.shift()?.(undefined);
+    await vi.waitFor(() => expect(decode).toHaveBeenCalledTimes(2));
+    pending.shift()?.(undefined);
+    await vi.waitFor(() => expect(drawn).toEqual([1, 3]));
+    expect(d.dropped).toBe(1);
+    expect(decode.mock.calls[1][0].type).toBe('image/jpeg');
+  });
+
+  it('frame rate over the last two seconds; stale after three frame periods; short ages', () => {
+    const s = new FrameStats();
+    for (let t = 0; t <= 1000; t += 1000 / 15) s.add(t);
+    expect(s.fps(1000)).toBeCloseTo(15, 0);
+    expect(s.fps(5000)).toBe(0);
+    expect(staleAfterMs(15)).toBe(1000);
+    expect(staleAfterMs(1)).toBe(3000);
+    expect(staleAfterMs(0)).toBe(2000);
+    expect(shortAge(120)).toBe('0.1 s');
+    expect(shortAge(4200)).toBe('4 s');
+    expect(shortAge(95_000)).toBe('1 min');
+  });
+
+  it('status: live with rate and age, "Stale: 4 s" when frames stop, waiting, hidden', () => {
+    const base = { name: 'Workbench', visible: true, fps: 15 };
+    expect(frameStatus({ ...base, at: 1000, now: 1100 })).toMatchObject({ state: 'live', label: 'Live', detail: '15.0 fps · frame 0.1 s old' });
+    expect(frameStatus({ ...base, at: 1000, now: 5200 })).toMatchObject({ state: 'stale', tone: 'warn', label: 'Stale: 4 s' });
+    expect(frameStatus({ ...base, at: null, now: 0 })).toMatchObject({ state: 'waiting', detail: 'Waiting for Workbench…' });
+    expect(frameStatus({ ...base, at: 1000, now: 1100, visible: false }).state).toBe('hidden');
+  });
+
+  it('zoom and pan keep the picture covering its box; a pinch keeps the point under the fingers', () => {
+    const W = 400, H = 300;
+    expect(clampView({ scale: 0.5, x: 10, y: 10 }, W, H)).toEqual(IDENTITY);
+    expect(clampView({ scale: 20, x: 0, y: 0 }, W, H).scale).toBe(ZOOM_MAX);
+    // Zoom 2x at the centre: the centre stays put.
+    const z = zoomAt(IDENTITY, 2, 200, 150, W, H);
+    expect(z).toEqual({ scale: 2, x: -200, y: -150 });
+    // Pan cannot pull the picture's edge into the box.
+    expect(panView(z, 1000, 0, W, H)).toEqual({ scale: 2, x: 0, y: -150 });
+    expect(panView(z, -1000, -1000, W, H)).toEqual({ scale: 2, x: -400, y: -300 });
+    // Fingers 100 px apart spread to 200 px around (100, 100): 2x, the picture point at (100, 100) stays there.
+    const p = pinchView(IDENTITY, { x: 50, y: 100 }, { x: 150, y: 100 }, { x: 0, y: 100 }, { x: 200, y: 100 }, W, H);
+    expect(p.scale).toBeCloseTo(2);
+    expect(100 * p.scale + p.x).toBeCloseTo(100);
+    expect(100 * p.scale + p.y).toBeCloseTo(100);
+    // A letterboxed picture (4:3 in a tall box) stays centred while it is narrower than the box, and covers
+    // the box (no letterbox band) where it is larger.
+    const pic = containRect(640, 480, 390, 700); // 390 x 292.5 at y 203.75
+    expect(pic).toEqual({ x: 0, y: 203.75, w: 390, h: 292.5 });
+    const z2 = zoomAt(IDENTITY, 2, 195, 350, 390, 700, pic);
+    expect(z2.y).toBeCloseTo((700 - 585) / 2 - 203.75 * 2);
+    const z4 = clampView({ scale: 4, x: 0, y: 0 }, 390, 700, pic);
+    expect(z4.y).toBeCloseTo(-203.75 * 4); // the picture's top edge at the box's top
+    expect(clampView({ scale: 4, x: 0, y: -1e6 }, 390, 700, pic).y).toBeCloseTo(700 - (203.75 + 292.5) * 4);
+    // Pinching in past 1x goes back to the whole picture.
+    expect(pinchView(p, { x: 0, y: 0 }, { x: 300, y: 0 }, { x: 0, y: 0 }, { x: 10, y: 0 }, W, H)).toEqual(IDENTITY);
+  });
 });
 
 describe('CameraView', () => {
-  it('subscribes only the chosen stream, shows its image with its age, and switches cleanly', async () => {
+  it('subscribes only the chosen stream, in CBOR with the newest frame only; draws frames on a canvas; switches cleanly', async () => {
     const s = fakeSubscribe();
-    render(CameraView, { streams, subscribe: s.subscribe });
+    const d = fakeDecode();
+    render(CameraView, { streams, subscribe: s.subscribe, decode: d.decode });
     expect([...s.live.keys()]).toEqual([streams[0].topic]);
     expect(s.subscribe.mock.calls[0][1]).toBe('sensor_msgs/CompressedImage');
-    s.live.get(streams[0].topic)?.({ format: 'jpeg', data: 'AAEC' });
+    expect(s.options.get(streams[0].topic)).toMatchObject({ compression: 'cbor', queue_length: 1 });
+    expect(screen.queryByRole('img')).toBeNull();
+    s.live.get(streams[0].topic)?.({ format: 'jpeg', data: JPEG });
+    await vi.waitFor(() => expect(drawImage).toHaveBeenCalledTimes(1));
     flushSync();
-    const img = /** @type {HTMLImageElement} */ (screen.getByRole('img', { name: 'Workbench camera image' }));
-    expect(img.getAttribute('src')).toBe('data:image/jpeg;base64,AAEC');
-    expect(screen.getByTestId('camera-freshness-age').textContent).toBe('updated just now');
+    expect(d.blobs[0].type).toBe('image/jpeg');
+    expect(d.blobs[0].size).toBe(JPEG.length);
+    expect(screen.getByRole('img', { name: 'Workbench camera image' })).toBeTruthy();
+    const canvas = /** @type {HTMLCanvasElement} */ (screen.getByTestId('camera-image').querySelector('canvas'));
+    expect([canvas.width, canvas.height]).toEqual([640, 480]);
 
     await fireEvent.change(screen.getByRole('combobox', { name: 'Camera' }), { target: { value: streams[1].topic } });
     expect([...s.live.keys()]).toEqual([streams[1].topic]);
     // The old camera's picture is not shown as the new one's.
     expect(screen.queryByRole('img')).toBeNull();
     expect(screen.getByText(/Waiting for Global view/)).toBeTruthy();
+  });
+
+  it('segmented buttons: a radio per stream moves the one subscription', async () => {
+    const s = fakeSubscribe();
+    render(CameraView, { streams, subscribe: s.subscribe, chooser: 'buttons', decode: fakeDecode().decode });
+    const global = screen.getByRole('radio', { name: 'Global view' });
+    await fireEvent.click(global);
+    expect([...s.live.keys()]).toEqual([streams[1].topic]);
+    expect(/** @type {HTMLInputElement} */ (global).checked).toBe(true);
+  });
+
+  it('shows the rate and the age, and "Stale: 4 s" when the frames stop', async () => {
+    vi.useFakeTimers({ toFake: ['Date', 'setInterval', 'clearInterval'] });
+    vi.setSystemTime(100_000);
+    const s = fakeSubscribe();
+    render(CameraView, { streams, subscribe: s.subscribe, decode: fakeDecode().decode });
+    const cb = s.live.get(streams[0].topic);
+    for (let i = 0; i < 16; i++) {
+      cb?.({ format: 'jpeg', data: JPEG });
+      vi.setSystemTime(100_000 + (i + 1) * 66);
+    }
+    vi.advanceTimersByTime(250);
+    flushSync();
+    expect(screen.getByTestId('camera-badge').textContent).toBe('Live');
+    expect(screen.getByTestId('camera-detail').textContent).toMatch(/^1\d\.\d fps · frame 0\.\d s old$/);
+    vi.setSystemTime(100_000 + 15 * 66 + 4100);
+    vi.advanceTimersByTime(250);
+    flushSync();
+    expect(screen.getByTestId('camera-status').dataset.state).toBe('stale');
+    expect(screen.getByTestId('camera-badge').textContent).toBe('Stale: 4 s');
+  });
+
+  it('Full screen asks the Fullscreen API, or shows a fixed overlay where it is missing; Reset zoom after zooming', async () => {
+    const s = fakeSubscribe();
+    render(CameraView, { streams, subscribe: s.subscribe, decode: fakeDecode().decode });
+    const root = screen.getByTestId('camera');
+    /** @type {any} */ (root).requestFullscreen = undefined;
+    await fireEvent.click(screen.getByRole('button', { name: 'Full screen' }));
+    expect(root.classList.contains('expanded')).toBe(true);
+    const exit = screen.getByRole('button', { name: 'Exit full screen' });
+    expect(exit.getAttribute('aria-pressed')).toBe('true');
+    await fireEvent.keyDown(document, { key: 'Escape' });
+    expect(root.classList.contains('expanded')).toBe(false);
+
+    const req = vi.fn(async () => {});
+    /** @type {any} */ (root).requestFullscreen = req;
+    await fireEvent.click(screen.getByRole('button', { name: 'Full screen' }));
+    expect(req).toHaveBeenCalled();
+
+    const reset = screen.getByRole('button', { name: 'Reset zoom' });
+    expect(/** @type {HTMLButtonElement} */ (reset).disabled).toBe(true);
+    await fireEvent.click(screen.getByRole('button', { name: 'Zoom in' }));
+    expect(screen.getByTestId('camera-zoom').textContent).toMatch(/Zoom 1\.5×/);
+    expect(/** @type {HTMLButtonElement} */ (reset).disabled).toBe(false);
+    await fireEvent.click(reset);
+    expect(screen.queryByTestId('camera-zoom')).toBeNull();
   });
 
   it('unsubscribes while the page is hidden and when it goes away', () => {

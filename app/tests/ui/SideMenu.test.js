@@ -15,7 +15,7 @@ describe('SideMenu', () => {
     const pages = menuPages([
       { id: 'system', title: 'System' },
       { id: 'home', title: 'Home' },
-      { id: 'video', title: 'Video' }, // not in this build yet
+      { id: 'vision', title: 'Vision' }, // not in this build yet
     ]);
     render(SideMenu, { ...base, pages, mode: 'running' });
     const links = screen.getAllByRole('link');
@@ -23,7 +23,7 @@ describe('SideMenu', () => {
     expect(screen.getByTestId('nav-home').getAttribute('href')).toBe('/');
     expect(screen.getByTestId('nav-system').getAttribute('aria-current')).toBe('page');
     expect(screen.getByTestId('nav-home').getAttribute('aria-current')).toBeNull();
-    expect(screen.queryByTestId('nav-video')).toBeNull();
+    expect(screen.queryByTestId('nav-vision')).toBeNull();
   });
 
   it("draws each feature's own icon from the list", () => {

@@ -10,10 +10,13 @@
 import homeIcon from './home/icon.js';
 import modulesIcon from './modules/icon.js';
 import manualIcon from './manual/icon.js';
+import sensorsIcon from './sensors/icon.js';
+import videoIcon from './video/icon.js';
 import processIcon from './process/icon.js';
 import routinesIcon from './routines/icon.js';
 import parametersIcon from './parameters/icon.js';
 import alarmsIcon from './alarms/icon.js';
+import databaseIcon from './database/icon.js';
 import systemIcon from './system/icon.js';
 import { alarmSignal } from './alarms/signal.svelte.js';
 
@@ -44,11 +47,14 @@ export const features = [
   { id: 'modules', path: '/modules', title: 'Modules', icon: modulesIcon, load: () => import('./modules/Page.svelte') },
   { id: 'process', path: '/process', title: 'Process', icon: processIcon, load: () => import('./process/Page.svelte') },
   { id: 'manual', path: '/manual', title: 'Manual motion', icon: manualIcon, load: () => import('./manual/Page.svelte') },
+  { id: 'sensors', path: '/sensors', title: 'Sensors', icon: sensorsIcon, load: () => import('./sensors/Page.svelte') },
+  { id: 'video', path: '/video', title: 'Cameras', icon: videoIcon, load: () => import('./video/Page.svelte') },
   { id: 'parameters', path: '/parameters', title: 'Parameters', icon: parametersIcon, load: () => import('./parameters/Page.svelte') },
   { id: 'routines', path: '/routines', title: 'Routines', icon: routinesIcon, load: () => import('./routines/Page.svelte') },
   {
     id: 'alarms', path: '/alarms', title: 'Alarms', icon: alarmsIcon, load: () => import('./alarms/Page.svelte'),
     shell: () => import('./alarms/Shell.svelte'), badge: () => alarmSignal.badge,
   },
+  { id: 'database', path: '/database', title: 'Database', icon: databaseIcon, load: () => import('./database/Page.svelte') },
   { id: 'system', path: '/system', title: 'System', icon: systemIcon, load: () => import('./system/Page.svelte') },
 ];

@@ -1,6 +1,9 @@
 /**
- * Camera images from sensor_msgs/CompressedImage as the rosbridge JSON encoding delivers them (uint8[] data
- * as a base64 string; an array of bytes is accepted too), turned into a data: URL an <img> can show.
+ * Camera images (sensor_msgs/CompressedImage) and the camera view's plain logic.
+ * Hot path: subscribed with rosbridge `compression: 'cbor'`, so `data` arrives as a Uint8Array (raw bytes in a
+ * binary frame, no base64 in JSON); frameBytes() -> Blob -> createImageBitmap -> canvas (LatestFrameDecoder).
+ * imageSrc() (a data: URL from the JSON encoding's base64) stays for callers without CBOR.
+ * Also: the frame rate and age (FrameStats, frameStatus), and zoom/pan math for pinch and buttons.
  */
 
 /**
@@ -47,4 +50,223 @@ export function cameraStreams(streams) {
   return streams
     .filter((s) => s && typeof s.topic === 'string' && s.topic)
     .map((s) => ({ name: typeof s.name === 'string' && s.name ? s.name : s.topic, topic: s.topic }));
+}
+
+// ---- the binary hot path: CBOR bytes -> Blob -> ImageBitmap -> canvas (no base64, no data: URLs) ----
+
+/**
+ * The image bytes of a CompressedImage: CBOR delivers uint8[] as a Uint8Array; a list of ints is accepted, and a
+ * base64 string (the JSON encoding) is decoded as a fallback for servers without CBOR.
+ * @param {unknown} data @returns {Uint8Array | null}
+ */
+export function frameBytes(data) {
+  if (data instanceof Uint8Array) return data.length ? data : null;
+  if (typeof data === 'string') {
+    if (!data) return null;
+    try {
+      const bin = atob(data);
+      const out = new Uint8Array(bin.length);
+      for (let i = 0; i < bin.length; i++) out[i] = bin.charCodeAt(i);
+      return out;
+    } catch {
+      return null;
+    }
+  }
+  if (Array.isArray(data) && data.length) return Uint8Array.from(data);
+  if (ArrayBuffer.isView(data) && data.byteLength) return new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
+  return null;
+}
+
+/**
+ * Decodes frames one at a time and draws the newest: a frame that arrives while one is decoding replaces any
+ * frame still waiting (a slow phone shows fewer frames, never older ones).
+ */
+export class LatestFrameDecoder {
+  /**
+   * @param {(bitmap: any) => void} draw  gets each decoded frame (it must close() it when done)
+   * @param {(blob: Blob) => Promise<any>} [decode]  createImageBitmap by default
+   */
+  constructor(draw, decode = (blob) => createImageBitmap(blob)) {
+    this.draw = draw;
+    this.decode = decode;
+    /** @type {Blob | null} */
+    this.waiting = null;
+    this.busy = false;
+    this.closed = false;
+    this.decoded = 0;
+    this.dropped = 0;
+    this.failed = 0;
+  }
+
+  /** @param {Uint8Array} bytes @param {string} mime */
+  push(bytes, mime) {
+    if (this.closed) return;
+    if (this.waiting) this.dropped++;
+    this.waiting = new Blob([/** @type {BlobPart} */ (bytes)], { type: mime });
+    if (!this.busy) this.#next();
+  }
+
+  close() {
+    this.closed = true;
+    this.waiting = null;
+  }
+
+  async #next() {
+    while (this.waiting && !this.closed) {
+      const blob = this.waiting;
+      this.waiting = null;
+      this.busy = true;
+      try {
+        const bmp = await this.decode(blob);
+        if (this.closed) bmp?.close?.();
+        else {
+          this.decoded++;
+          this.draw(bmp);
+        }
+      } catch {
+        this.failed++;
+      } finally {
+        this.busy = false;
+      }
+    }
+  }
+}
+
+/** Arrival times of the last frames: the stream's frame rate. */
+export class FrameStats {
+  /** @param {number} [spanMs]  the rate is counted over this much of the recent past */
+  constructor(spanMs = 2000) {
+    this.spanMs = spanMs;
+    /** @type {number[]} */
+    this.times = [];
+  }
+
+  /** @param {number} t  arrival (ms) */
+  add(t) {
+    this.times.push(t);
+    const from = t - this.spanMs;
+    let drop = 0;
+    while (drop < this.times.length && this.times[drop] < from) drop++;
+    if (drop) this.times.splice(0, drop);
+  }
+
+  reset() {
+    this.times = [];
+  }
+
+  /** Frames per second over the span up to `now` (0 when fewer than two frames came in it). @param {number} now */
+  fps(now) {
+    const ts = this.times.filter((t) => t >= now - this.spanMs);
+    if (ts.length < 2) return 0;
+    const dt = ts[ts.length - 1] - ts[0];
+    return dt > 0 ? ((ts.length - 1) * 1000) / dt : 0;
+  }
+}
+
+/**
+ * A stream is stale when no frame came for three frame periods (at least `minMs`); `fallbackMs` before the rate
+ * is known.
+ * @param {number} fps @param {number} [minMs] @param {number} [fallbackMs]
+ */
+export function staleAfterMs(fps, minMs = 1000, fallbackMs = 2000) {
+  return fps > 0 ? Math.max(minMs, 3000 / fps) : fallbackMs;
+}
+
+/** "0.1 s", "4 s", "3 min", "2 h". @param {number} ms */
+export function shortAge(ms) {
+  if (!Number.isFinite(ms) || ms < 0) return '—';
+  if (ms < 10_000) return `${ms < 1000 ? (ms / 1000).toFixed(1) : Math.floor(ms / 1000)} s`;
+  if (ms < 60_000) return `${Math.floor(ms / 1000)} s`;
+  if (ms < 3_600_000) return `${Math.floor(ms / 60_000)} min`;
+  return `${Math.floor(ms / 3_600_000)} h`;
+}
+
+/**
+ * What the camera's status line says.
+ * @param {{ at: number | null, now: number, fps: number, visible: boolean, name: string, staleMs?: number }} o
+ * @returns {{ state: 'live' | 'stale' | 'waiting' | 'hidden', tone: string, label: string, detail: string }}
+ */
+export function frameStatus({ at, now, fps, visible, name, staleMs }) {
+  if (!visible) return { state: 'hidden', tone: 'neutral', label: 'Paused', detail: 'Paused while the page is hidden' };
+  if (at === null) return { state: 'waiting', tone: 'neutral', label: 'Waiting', detail: `Waiting for ${name}…` };
+  const age = Math.max(0, now - at);
+  if (age > (staleMs ?? staleAfterMs(fps))) return { state: 'stale', tone: 'warn', label: `Stale: ${shortAge(age)}`, detail: `No frame from ${name} for ${shortAge(age)}` };
+  return { state: 'live', tone: 'ok', label: 'Live', detail: `${fps > 0 ? fps.toFixed(1) : '—'} fps · frame ${shortAge(age)} old` };
+}
+
+// ---- zoom and pan: a scale and an offset (CSS px) of the picture inside its box ----
+
+export const ZOOM_MIN = 1;
+export const ZOOM_MAX = 8;
+
+/** @typedef {{ scale: number, x: number, y: number }} View  picture point p shows at p * scale + (x, y) */
+/** @typedef {{ x: number, y: number, w: number, h: number }} Rect  where the picture sits in its box at 1x */
+
+/** @type {View} */
+export const IDENTITY = Object.freeze({ scale: 1, x: 0, y: 0 });
+
+/**
+ * Where a picture of iw x ih sits in a w x h box with object-fit: contain (letterboxed, centred).
+ * @param {number} iw @param {number} ih @param {number} w @param {number} h @returns {Rect}
+ */
+export function containRect(iw, ih, w, h) {
+  if (!(iw > 0 && ih > 0 && w > 0 && h > 0)) return { x: 0, y: 0, w, h };
+  const k = Math.min(w / iw, h / ih);
+  const pw = iw * k, ph = ih * k;
+  return { x: (w - pw) / 2, y: (h - ph) / 2, w: pw, h: ph };
+}
+
+/**
+ * Keep the scale in [ZOOM_MIN, ZOOM_MAX] and the picture covering its w x h box where it is larger than the box
+ * (no empty border when zoomed), centred where it is smaller.
+ * @param {View} v @param {number} w @param {number} h @param {Rect} [pic]  the picture in the box (default: all of it)
+ * @returns {View}
+ */
+export function clampView(v, w, h, pic = { x: 0, y: 0, w, h }) {
+  const scale = Math.min(ZOOM_MAX, Math.max(ZOOM_MIN, Number.isFinite(v.scale) ? v.scale : 1));
+  /** @param {number} t @param {number} size @param {number} p0 @param {number} plen */
+  const clamp = (t, size, p0, plen) => {
+    const len = plen * scale;
+    if (len <= size) return (size - len) / 2 - p0 * scale;
+    const lo = size - (p0 + plen) * scale, hi = -p0 * scale;
+    return Math.min(hi, Math.max(lo, Number.isFinite(t) ? t : 0));
+  };
+  const r = { scale, x: clamp(v.x, w, pic.x, pic.w), y: clamp(v.y, h, pic.y, pic.h) };
+  // -0 reads as 0 everywhere but in toEqual.
+  return { scale: r.scale, x: r.x + 0, y: r.y + 0 };
+}
+
+/**
+ * Zoom by `factor` keeping the picture point under (px, py) where it is (wheel, buttons: the box's centre).
+ * @param {View} v @param {number} factor @param {number} px @param {number} py @param {number} w @param {number} h @param {Rect} [pic]
+ */
+export function zoomAt(v, factor, px, py, w, h, pic) {
+  const scale = Math.min(ZOOM_MAX, Math.max(ZOOM_MIN, v.scale * factor));
+  const k = scale / v.scale;
+  return clampView({ scale, x: px - (px - v.x) * k, y: py - (py - v.y) * k }, w, h, pic);
+}
+
+/** @param {View} v @param {number} dx @param {number} dy @param {number} w @param {number} h @param {Rect} [pic] */
+export function panView(v, dx, dy, w, h, pic) {
+  return clampView({ scale: v.scale, x: v.x + dx, y: v.y + dy }, w, h, pic);
+}
+
+/**
+ * Two-finger pinch: from the view at the gesture's start and both pointers then and now, the view that keeps the
+ * picture point under the fingers' midpoint under it, scaled by how far the fingers spread.
+ * @param {View} start @param {{x: number, y: number}} a0 @param {{x: number, y: number}} b0
+ * @param {{x: number, y: number}} a1 @param {{x: number, y: number}} b1 @param {number} w @param {number} h @param {Rect} [pic]
+ * @returns {View}
+ */
+export function pinchView(start, a0, b0, a1, b1, w, h, pic) {
+  const d0 = Math.hypot(b0.x - a0.x, b0.y - a0.y);
+  const d1 = Math.hypot(b1.x - a1.x, b1.y - a1.y);
+  const m0 = { x: (a0.x + b0.x) / 2, y: (a0.y + b0.y) / 2 };
+  const m1 = { x: (a1.x + b1.x) / 2, y: (a1.y + b1.y) / 2 };
+  const scale = Math.min(ZOOM_MAX, Math.max(ZOOM_MIN, d0 > 0 ? start.scale * (d1 / d0) : start.scale));
+  // The picture point under m0 at the start...
+  const cx = (m0.x - start.x) / start.scale;
+  const cy = (m0.y - start.y) / start.scale;
+  // ...is under m1 now.
+  return clampView({ scale, x: m1.x - cx * scale, y: m1.y - cy * scale }, w, h, pic);
 }

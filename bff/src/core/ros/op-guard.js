@@ -45,7 +45,7 @@ export function createOpGuard({ grantsOf, motion, lease, audit, checkArgs = () =
   return {
     /**
      * @param {ClientCtx} ctx @param {Buffer} data @param {boolean} isBinary
-     * @returns {{forward: boolean, data: Buffer, replies: Frame[]}}
+     * @returns {{forward: boolean, data: Buffer, replies: Frame[], msg?: any}} msg: the decoded request when forwarded
      */
     inspect(ctx, data, isBinary) {
       let msg;
@@ -91,10 +91,10 @@ export function createOpGuard({ grantsOf, motion, lease, audit, checkArgs = () =
           const clean = { ...msg, id };
           delete clean.fragment_size;
           if (clean.compression !== 'cbor') delete clean.compression;
-          return { forward: true, data: isBinary ? Buffer.from(cborEncode(clean)) : Buffer.from(JSON.stringify(clean)), replies: [] };
+          return { forward: true, data: isBinary ? Buffer.from(cborEncode(clean)) : Buffer.from(JSON.stringify(clean)), replies: [], msg: clean };
         }
       }
-      return { forward: true, data, replies: [] };
+      return { forward: true, data, replies: [], msg };
     },
 
     /** Frames from rosbridge to this browser. @param {ClientCtx} ctx @param {Buffer} data @param {boolean} isBinary @returns {Buffer} */

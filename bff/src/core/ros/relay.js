@@ -1,11 +1,14 @@
 // The /ros WebSocket: authenticated by the session cookie, one upstream rosbridge socket per browser socket.
-// Transport only: what may pass is decided by the guard (ros/op-guard.js).
+// Transport only: what may pass is decided by the guard (ros/op-guard.js); what waits for a slow browser, and
+// what may be dropped, by the outbox (ros/outbox.js). Each browser has its own outbox and send window, so a
+// slow or sleeping phone never holds up another socket; rosbridge's socket is always read.
 import { WebSocketServer, WebSocket } from 'ws';
+import { ClientOutbox, SendWindow, DEFAULTS as FLOW_DEFAULTS } from './outbox.js';
 
 /**
  * @typedef {import('./op-guard.js').Session & {claims: import('../auth/tokens.js').Claims}} Session
  * @typedef {import('./op-guard.js').ClientCtx} ClientCtx
- * @typedef {{inspect: (ctx: ClientCtx, data: Buffer, isBinary: boolean) => {forward: boolean, data: Buffer, replies: import('./op-guard.js').Frame[]},
+ * @typedef {{inspect: (ctx: ClientCtx, data: Buffer, isBinary: boolean) => {forward: boolean, data: Buffer, replies: import('./op-guard.js').Frame[], msg?: any},
  *   outbound: (ctx: ClientCtx, data: Buffer, isBinary: boolean) => Buffer}} Guard
  */
 
@@ -14,10 +17,12 @@ export class RosRelay {
    * @param {{upstreamUrl: string, authenticate: (req: import('node:http').IncomingMessage) => Session|null,
    *   checkOrigin?: (req: import('node:http').IncomingMessage) => boolean, guard: Guard,
    *   isValid?: (s: Session) => boolean, onClose?: (s: Session, stillOpen: number) => void,
-   *   recheckMs?: number, log?: (msg: string) => void}} o
+   *   recheckMs?: number, log?: (msg: string) => void, flow?: Partial<typeof FLOW_DEFAULTS>}} o
+   *   flow: per-client queue bounds and send window (ros/outbox.js DEFAULTS).
    */
   constructor({ upstreamUrl, authenticate, checkOrigin = () => true, guard, isValid = () => true,
-    onClose = () => {}, recheckMs = 1000, log = () => {} }) {
+    onClose = () => {}, recheckMs = 1000, log = () => {}, flow = {} }) {
+    this.flow = { ...FLOW_DEFAULTS, ...flow };
     this.upstreamUrl = upstreamUrl;
     this.authenticate = authenticate;
     this.checkOrigin = checkOrigin;
@@ -26,7 +31,7 @@ export class RosRelay {
     this.onClose = onClose;
     this.log = log;
     this.wss = new WebSocketServer({ noServer: true, maxPayload: 16 * 1024 * 1024 });
-    /** @type {Map<WebSocket, ClientCtx & {session: Session}>} */
+    /** @type {Map<WebSocket, ClientCtx & {session: Session, outbox: ClientOutbox, window: SendWindow}>} */
     this.clients = new Map();
     // Sessions are re-checked so an expired or revoked login, or a removed user, loses its socket.
     this.timer = setInterval(() => this.recheck(), recheckMs);
@@ -56,16 +61,21 @@ export class RosRelay {
       if (socket.destroyed) { up.close(); return; }
       this.wss.handleUpgrade(req, socket, head, (ws) => {
         up.off('message', onEarly);
-        this.bridge(ws, up, session, req);
-        for (const [d, b] of early) ws.send(d, { binary: b });
+        const out = this.bridge(ws, up, session, req);
+        for (const [d, b] of early) out(d, b);
       });
     });
   }
 
-  /** @param {WebSocket} ws @param {WebSocket} up @param {Session} session @param {import('node:http').IncomingMessage} req */
+  /**
+   * @param {WebSocket} ws @param {WebSocket} up @param {Session} session @param {import('node:http').IncomingMessage} req
+   * @returns {(data: Buffer, isBinary: boolean) => void} queues a frame from rosbridge for this browser
+   */
   bridge(ws, up, session, req) {
-    /** @type {ClientCtx & {session: Session}} */
-    const ctx = { session, ip: req.socket.remoteAddress || '', rosapiCalls: new Map(), lastPublishAudit: new Map() };
+    const outbox = new ClientOutbox(this.flow);
+    const window = new SendWindow(this.flow);
+    /** @type {ClientCtx & {session: Session, outbox: ClientOutbox, window: SendWindow}} */
+    const ctx = { session, ip: req.socket.remoteAddress || '', rosapiCalls: new Map(), lastPublishAudit: new Map(), outbox, window };
     this.clients.set(ws, ctx);
     up.removeAllListeners('error');
     let closed = false;
@@ -79,10 +89,32 @@ export class RosRelay {
       if (up.readyState === WebSocket.OPEN) up.close();
       else if (up.readyState === WebSocket.CONNECTING) up.terminate();
     };
-    up.on('message', (data, isBinary) => {
-      if (ws.readyState !== WebSocket.OPEN) return;
-      ws.send(this.guard.outbound(ctx, /** @type {Buffer} */ (data), isBinary), { binary: isBinary });
-    });
+
+    // Write while the browser has confirmed reading all but windowBytes (pong) and ws holds little unsent.
+    const pump = () => {
+      while (ws.readyState === WebSocket.OPEN && window.open() && ws.bufferedAmount < window.windowBytes) {
+        const f = outbox.shift();
+        if (!f) return;
+        ws.send(f.data, { binary: f.binary }, afterWrite);
+        const ping = window.wrote(f.data.length);
+        if (ping) ws.ping(ping);
+      }
+    };
+    const afterWrite = () => { if (outbox.length) pump(); };
+    ws.on('pong', (d) => { if (window.pong(d.toString('latin1')) && outbox.length) pump(); });
+    /** @param {Buffer|string} data @param {boolean} isBinary */
+    const out = (data, isBinary) => {
+      if (closed || ws.readyState !== WebSocket.OPEN) return;
+      if (!outbox.push(typeof data === 'string' ? Buffer.from(data) : data, isBinary)) {
+        this.log(`closing /ros of ${session.username}: not reading (${outbox.replyBytes} bytes of replies unsent, limit ${outbox.maxReplyBytes})`);
+        ws.terminate();
+        closeBoth(1008, 'client too slow');
+        return;
+      }
+      pump();
+    };
+
+    up.on('message', (data, isBinary) => out(this.guard.outbound(ctx, /** @type {Buffer} */ (data), isBinary), isBinary));
     up.on('close', () => closeBoth(1012, 'rosbridge closed'));
     up.on('error', (e) => {
       this.log(`rosbridge upstream error for ${session.username}: ${e.message}`);
@@ -91,12 +123,25 @@ export class RosRelay {
     ws.on('message', (raw, isBinary) => {
       const data = Array.isArray(raw) ? Buffer.concat(raw) : Buffer.from(/** @type {any} */ (raw));
       const v = this.guard.inspect(ctx, data, isBinary);
-      if (ws.readyState === WebSocket.OPEN) for (const r of v.replies) ws.send(r.data, { binary: r.binary });
-      if (v.forward && up.readyState === WebSocket.OPEN) up.send(v.data, { binary: isBinary });
+      for (const r of v.replies) out(typeof r.data === 'string' ? Buffer.from(r.data) : r.data, r.binary);
+      if (v.forward && up.readyState === WebSocket.OPEN) {
+        outbox.noteRequest(v.msg);
+        up.send(v.data, { binary: isBinary });
+      }
     });
     ws.on('close', () => closeBoth(1000, ''));
     ws.on('error', () => closeBoth(1011, ''));
     this.log(`/ros opened by ${session.username} (${session.role}) from ${ctx.ip}`);
+    return out;
+  }
+
+  /** Queue counters of every open /ros socket (tests, benchmarks). */
+  flowStats() {
+    return [...this.clients.values()].map(({ session, outbox, window }) => ({
+      username: session.username, queuedBytes: outbox.queuedBytes, peakQueuedBytes: outbox.peakQueuedBytes,
+      replyBytes: outbox.replyBytes, dropped: outbox.dropped, droppedBytes: outbox.droppedBytes,
+      sentBytes: window.sentBytes, unacked: window.unacked,
+    }));
   }
 
   recheck() {

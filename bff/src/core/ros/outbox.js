@@ -1,0 +1,224 @@
+// What the /ros relay owes one browser, and how much of it may be on the wire. Pure: no sockets, no timers.
+//
+// ClientOutbox: topic messages (`op: publish`) wait in one lane per topic and encoding, bounded by the
+// subscription's `queue_length` (a newer message pushes out the oldest unsent one: latest wins); every
+// other frame (service responses, status, fragments, png, action results...) waits in the reply queue,
+// which is never dropped from but is bounded in bytes: past the bound the owner must disconnect the client.
+// Frames leave in arrival order (the oldest head among the reply queue and the lanes goes first).
+//
+// SendWindow: bytes written to the socket that the browser has not yet confirmed reading. A WebSocket ping
+// follows the written bytes; its pong proves everything before it was read, kernel buffers included
+// (Node cannot shrink a TCP socket's SO_SNDBUF, which Linux auto-tunes up to megabytes).
+import { decode as cborDecode } from 'cbor-x';
+
+/** @typedef {{data: Buffer, binary: boolean, seq: number, lane?: string}} OutFrame */
+
+export const DEFAULTS = Object.freeze({
+  /** lane bound when a subscription gives no queue_length (or 0, roslib's default): the newest message only */
+  defaultQueueLength: 1,
+  /** the largest queue_length honoured (a lane of 30 KB images then holds at most ~3 MB) */
+  maxQueueLength: 100,
+  /** unsent non-droppable replies per client before it is disconnected */
+  maxReplyBytes: 8 * 1024 * 1024,
+  /** bytes written but not confirmed read (pong) before the relay stops writing to that client */
+  windowBytes: 48 * 1024,
+  /** a ping follows at least every this many written bytes (and always when the window fills) */
+  pingEveryBytes: 12 * 1024,
+});
+
+/**
+ * `op` and `topic` of a rosbridge frame, read from its first bytes when the frame has rosbridge's usual
+ * `{"op":..,"topic":..,"msg":..}` shape (JSON text or CBOR map); otherwise the frame is decoded.
+ * @param {Buffer} data @param {boolean} isBinary @returns {{op?: string, topic?: string}}
+ */
+export function classify(data, isBinary) {
+  if (isBinary) {
+    const head = cborHead(data);
+    if (head.op && (head.op !== 'publish' || head.topic)) return head;
+    try {
+      const m = cborDecode(data);
+      return { op: typeof m?.op === 'string' ? m.op : undefined, topic: typeof m?.topic === 'string' ? m.topic : undefined };
+    } catch { return {}; }
+  }
+  const head = data.subarray(0, 512).toString('latin1');
+  const fast = /^\s*\{\s*"op"\s*:\s*"([A-Za-z_]+)"\s*(?:,\s*"topic"\s*:\s*"([^"\\]*)")?/.exec(head);
+  if (fast && (fast[1] !== 'publish' || fast[2] !== undefined)) return { op: fast[1], topic: fast[2] };
+  if (!head.includes('"publish"')) return fast ? { op: fast[1] } : {};
+  try {
+    const m = JSON.parse(data.toString('utf8'));
+    return { op: typeof m?.op === 'string' ? m.op : undefined, topic: typeof m?.topic === 'string' ? m.topic : undefined };
+  } catch { return {}; }
+}
+
+/** The leading text-string pairs of a CBOR map (stops at the first value that is not a short text string). @param {Buffer} b */
+function cborHead(b) {
+  /** @type {{op?: string, topic?: string}} */
+  const out = {};
+  let i = 0;
+  const first = b[i++];
+  if (first === undefined || first >> 5 !== 5) return out;
+  let n = first & 31;
+  if (n === 24) n = b[i++];
+  else if (n > 24) n = 8; // larger or indefinite maps: read a few pairs at most
+  /** @returns {string|undefined} */
+  const text = () => {
+    const h = b[i];
+    if (h === undefined || h >> 5 !== 3) return undefined;
+    let len = h & 31; i++;
+    if (len === 24) len = b[i++];
+    else if (len === 25) { len = b.readUInt16BE(i); i += 2; } else if (len > 25) return undefined;
+    if (len === undefined || i + len > b.length) return undefined;
+    const s = b.toString('utf8', i, i + len); i += len;
+    return s;
+  };
+  for (let k = 0; k < Math.min(n, 8); k++) {
+    const key = text(); if (key === undefined) break;
+    const val = text(); if (val === undefined) break;
+    if (key === 'op') out.op = val;
+    else if (key === 'topic') out.topic = val;
+  }
+  return out;
+}
+
+export class ClientOutbox {
+  /** @param {Partial<typeof DEFAULTS>} [o] */
+  constructor(o = {}) {
+    const c = { ...DEFAULTS, ...o };
+    this.defaultQueueLength = c.defaultQueueLength;
+    this.maxQueueLength = c.maxQueueLength;
+    this.maxReplyBytes = c.maxReplyBytes;
+    /** topic -> (subscription id -> queue_length asked) */
+    this.subs = new Map();
+    /** @type {Map<string, OutFrame[]>} lane key (encoding + topic) -> unsent messages, oldest first */
+    this.lanes = new Map();
+    /** @type {OutFrame[]} */
+    this.replies = [];
+    this.replyHead = 0;
+    this.seq = 0;
+    // Counters (tests, logs, benchmarks).
+    this.queuedBytes = 0;
+    this.replyBytes = 0;
+    this.dropped = 0;
+    this.droppedBytes = 0;
+    this.peakQueuedBytes = 0;
+  }
+
+  /** A request the browser sent on (after the guard): subscriptions set the lane bounds. @param {any} msg */
+  noteRequest(msg) {
+    if (!msg || typeof msg.topic !== 'string') return;
+    if (msg.op === 'subscribe') {
+      let m = this.subs.get(msg.topic);
+      if (!m) this.subs.set(msg.topic, (m = new Map()));
+      const q = Number.isInteger(msg.queue_length) && msg.queue_length > 0 ? msg.queue_length : this.defaultQueueLength;
+      m.set(typeof msg.id === 'string' ? msg.id : '', Math.min(q, this.maxQueueLength));
+    } else if (msg.op === 'unsubscribe') {
+      const m = this.subs.get(msg.topic);
+      if (m && typeof msg.id === 'string' && m.size > 1) m.delete(msg.id);
+      else this.subs.delete(msg.topic);
+    }
+  }
+
+  /** Lane bound of a topic: the largest queue_length among its subscriptions (rosbridge merges them so). @param {string} topic */
+  queueLengthOf(topic) {
+    const m = this.subs.get(topic);
+    return m && m.size ? Math.max(...m.values()) : this.defaultQueueLength;
+  }
+
+  /**
+   * Queue a frame from rosbridge.
+   * @param {Buffer} data @param {boolean} binary @param {{op?: string, topic?: string}} [kind] (classify(data, binary) if omitted)
+   * @returns {boolean} false when the reply queue is past its bound (the caller disconnects the client)
+   */
+  push(data, binary, kind = classify(data, binary)) {
+    /** @type {OutFrame} */
+    const f = { data, binary, seq: this.seq++ };
+    this.queuedBytes += data.length;
+    if (kind.op === 'publish' && kind.topic !== undefined) {
+      f.lane = (binary ? 'b' : 't') + kind.topic;
+      let lane = this.lanes.get(f.lane);
+      if (!lane) this.lanes.set(f.lane, (lane = []));
+      lane.push(f);
+      const bound = this.queueLengthOf(kind.topic);
+      while (lane.length > bound) {
+        const old = /** @type {OutFrame} */ (lane.shift());
+        this.queuedBytes -= old.data.length;
+        this.dropped++;
+        this.droppedBytes += old.data.length;
+      }
+    } else {
+      this.replies.push(f);
+      this.replyBytes += data.length;
+    }
+    if (this.queuedBytes > this.peakQueuedBytes) this.peakQueuedBytes = this.queuedBytes;
+    return this.replyBytes <= this.maxReplyBytes;
+  }
+
+  get length() {
+    let n = this.replies.length - this.replyHead;
+    for (const lane of this.lanes.values()) n += lane.length;
+    return n;
+  }
+
+  /** The oldest unsent frame, removed from the outbox. @returns {OutFrame|undefined} */
+  shift() {
+    /** @type {OutFrame|undefined} */
+    let best = this.replies[this.replyHead];
+    /** @type {OutFrame[]|undefined} */
+    let from;
+    for (const lane of this.lanes.values()) if (lane.length && (!best || lane[0].seq < best.seq)) { best = lane[0]; from = lane; }
+    if (!best) return undefined;
+    if (from) {
+      from.shift();
+      if (!from.length) this.lanes.delete(/** @type {string} */ (best.lane));
+    } else {
+      /** @type {any} */ (this.replies)[this.replyHead++] = undefined;
+      this.replyBytes -= best.data.length;
+      if (this.replyHead > 64 && this.replyHead * 2 > this.replies.length) { this.replies = this.replies.slice(this.replyHead); this.replyHead = 0; }
+    }
+    this.queuedBytes -= best.data.length;
+    return best;
+  }
+}
+
+export class SendWindow {
+  /** @param {Partial<Pick<typeof DEFAULTS, 'windowBytes'|'pingEveryBytes'>>} [o] */
+  constructor(o = {}) {
+    this.windowBytes = o.windowBytes ?? DEFAULTS.windowBytes;
+    this.pingEveryBytes = o.pingEveryBytes ?? DEFAULTS.pingEveryBytes;
+    this.sentBytes = 0;
+    this.ackedBytes = 0;
+    this.pingedAt = 0;
+    this.pingSeq = 0;
+    /** @type {Map<string, number>} ping payload -> sentBytes when it was written */
+    this.pings = new Map();
+  }
+
+  /** Bytes written and not yet confirmed read. */
+  get unacked() { return this.sentBytes - this.ackedBytes; }
+
+  /** May another frame be written now? (One frame may overshoot the window, so any frame size gets through.) */
+  open() { return this.unacked < this.windowBytes; }
+
+  /**
+   * Account for a written frame. @param {number} bytes
+   * @returns {string|null} the payload of a ping to write right after it, or null
+   */
+  wrote(bytes) {
+    this.sentBytes += bytes;
+    if (this.sentBytes - this.pingedAt < this.pingEveryBytes && this.open()) return null;
+    this.pingedAt = this.sentBytes;
+    const payload = `bp${++this.pingSeq}`;
+    this.pings.set(payload, this.sentBytes);
+    // Only a bounded number of pings is ever outstanding: each one needs pingEveryBytes or a full window.
+    return payload;
+  }
+
+  /** A pong arrived. @param {string} payload @returns {boolean} whether it was one of ours */
+  pong(payload) {
+    const at = this.pings.get(payload);
+    if (at === undefined) return false;
+    for (const [k, v] of this.pings) { if (v > at) break; this.pings.delete(k); }
+    if (at > this.ackedBytes) this.ackedBytes = at;
+    return true;
+  }
+}
