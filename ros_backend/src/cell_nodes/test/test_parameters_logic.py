@@ -140,7 +140,7 @@ def test_demo_cell_section() -> None:
     assert config.csv == "parameters.csv"
     assert {d.type for d in config.items} == {"int", "float", "bool", "enum", "string"}
     assert by_id["gripper_type"].options and by_id["gripper_type"].default in by_id["gripper_type"].options
-    assert by_id["approach_height"].default == "50" and by_id["verify_placement"].default == "true"
+    assert by_id["approach_height"].default == "100" and by_id["verify_placement"].default == "true"
     assert parse_parameters({}) is None
     assert read_values({"cell": {}}) == {}
 

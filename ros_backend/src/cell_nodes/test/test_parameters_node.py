@@ -96,15 +96,15 @@ def test_get_set_refuse_hand_edit_and_restart(data_dir: Path) -> None:
         by_id = {p.id: p for p in reply.parameters}
         ah = by_id["approach_height"]
         assert (ah.category, ah.label, ah.type, ah.unit, ah.value, ah.default_value) == \
-               ("Motion", "Approach height", "float", "mm", "50", "50")
+               ("Motion", "Approach height", "float", "mm", "100", "100")
         assert (ah.has_min, ah.has_max, ah.min, ah.max, ah.decimals) == (True, True, 5.0, 200.0, 1)
         assert list(by_id["gripper_type"].options) == ["parallel", "vacuum", "magnetic"]
         assert by_id["verify_placement"].value == "true" and not by_id["verify_placement"].has_min
         assert by_id["recipe_name"].max_length == 64 and by_id["parts_per_cycle"].decimals == -1
-        assert csv.read_text().startswith("id,value,unit,category,label\napproach_height,50,mm,Motion,")
+        assert csv.read_text().startswith("id,value,unit,category,label\napproach_height,100,mm,Motion,")
 
         values = Values()
-        wait_for(lambda: values.last().get("approach_height") == "50", 10, what="the latched values")
+        wait_for(lambda: values.last().get("approach_height") == "100", 10, what="the latched values")
 
         # --- a valid set: saved, on the topic, read back by get
         reply = set_(changes=[ParameterValue(id="approach_height", value="60.5"),

@@ -125,7 +125,8 @@ def test_a_cycle_puts_the_first_cube_into_the_first_pocket_with_a_pause_in_it(en
     assert objects.msg.poses[0].position.z < 0.03          # the cube is still on the table, in the fingers
     r = ui.resume()
     assert (r.success, r.message) == (True, "resumed")
-    wait_for(lambda: ui.state.msg.step == "Check the part is in the gripper", 5, what="the next step after the resume")
+    # (The part check takes a few ms: the log has it, a look at the state might not.)
+    wait_for(lambda: "Resumed: next 'Check the part is in the gripper'" in ui.texts(), 5, what="the next step after the resume")
     s = ui.wait_state("idle", 60)
     took = time.monotonic() - t0
     assert (s.message, s.cycles_done, s.cycle) == ("1 cycle done", 1, 2)

@@ -47,7 +47,9 @@ def _alive(c: WSClient, topic: str, expect: Any) -> None:
     """The connection still works: a normal subscribe gets the latched message."""
     c.send_json({"op": "unsubscribe", "topic": topic})
     c.send_json({"op": "subscribe", "id": "alive", "topic": topic, "type": "std_msgs/String"})
-    got = c.recv_until(lambda m: isinstance(m, dict) and m.get("op") == "publish" and m.get("topic") == topic, 15)
+    # (A fuzzed publish to the topic may still be on its way under load: wait for the latched value itself.)
+    got = c.recv_until(lambda m: isinstance(m, dict) and m.get("op") == "publish" and m.get("topic") == topic
+                       and m.get("msg") == expect, 15)
     assert got["msg"] == expect
 
 
