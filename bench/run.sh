@@ -4,6 +4,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/bootstrap.sh
 source scripts/ros-env.sh
+# npm run bench -- --soak [--minutes N --clients N --rate HZ]: the soak alone, then exit. It is not part of the
+# default run below because it takes 10 minutes by default; run it when the machine is quiet.
+if [[ "${1:-}" == "--soak" ]]; then
+  shift
+  echo "== soak: many clients through the BFF for minutes, RSS of the BFF and of rosbridge =="
+  exec node bench/soak_bench.mjs "$@"
+fi
 echo "== rosbridge server (direct) =="
 python bench/rosbridge_bench.py
 echo; echo "== BFF relay path =="

@@ -11,9 +11,10 @@ const chromium = {
   },
 };
 
-// Specs that drive /ros directly, move the robot, change files on the robot PC or check subscriptions with rostopic:
+// Specs that drive /ros directly, move the robot, change files on the robot PC, check subscriptions with rostopic
+// or kill a process of the stack:
 // once, on the phone (they share one stack and its robot). Tablet and desktop run the shell and the wide layouts.
-const PHONE_ONLY = /(access|manual|modules|alarms|process|routines|parameters|sensors|video|database|audit)\.spec/;
+const PHONE_ONLY = /(access|manual|modules|alarms|process|routines|parameters|sensors|video|database|audit|recovery)\.spec/;
 
 export default defineConfig({
   testDir: './tests',

@@ -3,6 +3,15 @@
 // Every child runs in its own process group and carries a stack marker in its environment, so Ctrl-C
 // stops all of them (roslaunch's nodes live in their own sessions) within 5 s and leaves nothing behind.
 // A watchdog (scripts/watchdog.js, detached) stops them too if this supervisor dies, even by SIGKILL.
+//
+// Supervision: a child that dies without being asked to is restarted with the same command after a back-off
+// (scripts/supervise/restart-policy.js: 0.5 s doubling to 10 s), once whatever is left of it is gone: its
+// process group and every process carrying its own marker (CELL_STACK_CHILD=<name>: roslaunch's nodes
+// outlive a SIGKILLed roslaunch, and an old rosbridge would hold the port). When roscore dies, the ROS side
+// and the simulated cell are stopped too and started again once the new master answers (rospy nodes never
+// re-register with a new master). An external master (one we did not start) is never restarted. A crash
+// loop (5 crashes of one child within 60 s) ends the stack with exit code 1, a configuration error (a child
+// exits with 2) at once with exit code 2: whatever runs the stack (systemd) decides what comes next.
 import { spawn } from 'node:child_process';
 import crypto from 'node:crypto';
 import fs from 'node:fs';
@@ -14,6 +23,7 @@ import { loadCell, CellConfigError } from '../bff/src/core/config/cell.js';
 import { FEATURES } from '../bff/src/features/index.js';
 import { launchFiles } from './feature-launch.js';
 import { masterOnline } from '../bff/src/core/ros/health.js';
+import { RestartPolicy, seconds } from './supervise/restart-policy.js';
 
 const env = readEnv();
 const urHost = process.env.UR_HOST || '127.0.0.1'; // the UR controller, or where the simulated one listens
@@ -39,22 +49,40 @@ const childEnv = {
   ROS_HOSTNAME: process.env.ROS_HOSTNAME || '127.0.0.1',
 };
 
-/** @type {{name: string, proc: import('node:child_process').ChildProcess, essential: boolean}[]} */
-const children = [];
+/** Children that hold registrations with the master: started again after a new roscore. */
+const MASTER_DEPENDENTS = ['ros', 'sim'];
+/** A child exiting with this code found a configuration error (bad cell or users file): restarting cannot help. */
+const CONFIG_ERROR = 2;
+/** After SIGTERM, how long what is left of a dead child (or a dependent of a dead master) gets before SIGKILL. */
+const CLEANUP_GRACE_MS = 1500;
+
+/**
+ * One supervised child: its command, its current process (null while it is down) and its restart policy.
+ * `gen` is bumped whenever a pending restart must be dropped (a newer one, or roscore's); `held` marks a
+ * dependent of the master waiting for the new roscore.
+ * @typedef {{name: string, cmd: string, args: string[], proc: import('node:child_process').ChildProcess | null,
+ *   policy: RestartPolicy, gen: number, held: boolean}} Child
+ */
+/** @type {Map<string, Child>} in start order */
+const children = new Map();
 let stopping = false;
+/** roscore died and its restart (and its dependents') is under way. */
+let coreDown = false;
+/** Resolved by shutdown: every back-off wait ends at once. @type {Set<() => void>} */
+const wakers = new Set();
 
 // The watchdog runs in its own session and holds the read end of a pipe whose write end only this process
 // has: when the supervisor dies, however it dies, the watchdog sees EOF and stops every process of the stack
 // (child groups and marked processes). It starts before the first child and learns each child's group as it
-// starts; a child spawned at the moment of a SIGKILL is still found by its marker. After a clean shutdown,
-// `done` + EOF make it check that nothing is left and exit.
+// starts (restarts included); a child spawned at the moment of a SIGKILL is still found by its marker.
+// After a clean shutdown, `done` + EOF make it check that nothing is left and exit.
 const WATCHDOG = fileURLToPath(new URL('./watchdog.js', import.meta.url));
 /** @type {import('node:child_process').ChildProcess | null} */
 let watchdog = null;
 let watchdogRestarts = 0;
 
 function startWatchdog() {
-  const groups = children.filter((c) => c.proc.pid && !exited(c.proc)).map((c) => String(c.proc.pid));
+  const groups = [...children.values()].filter((c) => c.proc?.pid && !exited(c.proc)).map((c) => String(c.proc?.pid));
   const wd = spawn(process.execPath, [WATCHDOG, STACK_ID, String(process.pid), ...groups],
     { detached: true, stdio: ['pipe', 'ignore', 'inherit'] });
   wd.stdin.on('error', () => { /* it died: see 'exit' */ });
@@ -68,9 +96,9 @@ function startWatchdog() {
   return wd;
 }
 
-/** Tell the watchdog about a new child group. */
-function watch(pid) {
-  if (pid && watchdog?.stdin?.writable) watchdog.stdin.write(`group ${pid}\n`);
+/** Tell the watchdog about a child group (`group`), or that one is gone for good (`forget`). */
+function tellWatchdog(cmd, pid) {
+  if (pid && watchdog?.stdin?.writable) watchdog.stdin.write(`${cmd} ${pid}\n`);
 }
 
 /** After a clean shutdown: let the watchdog check that nothing is left, and wait for it to exit. */
@@ -83,13 +111,28 @@ async function stopWatchdog(ms) {
 }
 
 /** Start a command inside the ROS environment (scripts/ros-env.sh). */
-function startRos(name, command, essential = true) {
-  return start(name, 'bash', ['-c', `source scripts/ros-env.sh && exec ${command}`], essential);
+function startRos(name, command) {
+  return start(name, 'bash', ['-c', `source scripts/ros-env.sh && exec ${command}`]);
 }
 
-function start(name, cmd, args, essential = true) {
+/** Register a child and start it (or hold it, for a dependent of a master being restarted). */
+function start(name, cmd, args) {
+  /** @type {Child} */
+  const c = { name, cmd, args, proc: null, policy: new RestartPolicy(), gen: 0, held: false };
+  children.set(name, c);
+  if (coreDown && MASTER_DEPENDENTS.includes(name)) c.held = true;
+  else spawnChild(c);
+  return c;
+}
+
+/** @param {Child} c */
+function spawnChild(c) {
+  if (stopping) return;
   if (!watchdog) watchdog = startWatchdog();
-  const proc = spawn(cmd, args, { cwd: REPO_ROOT, env: childEnv, detached: true, stdio: ['ignore', 'pipe', 'pipe'] });
+  const { name } = c;
+  const proc = spawn(c.cmd, c.args, {
+    cwd: REPO_ROOT, env: { ...childEnv, CELL_STACK_CHILD: name }, detached: true, stdio: ['ignore', 'pipe', 'pipe'],
+  });
   const prefix = (stream, out) => stream.on('data', (d) => {
     for (const line of d.toString().split('\n')) {
       if (line.trim()) out.write(line.startsWith(`[${name}]`) ? `${line}\n` : `[${name}] ${line}\n`);
@@ -97,57 +140,197 @@ function start(name, cmd, args, essential = true) {
   });
   prefix(proc.stdout, process.stdout);
   prefix(proc.stderr, process.stderr);
-  proc.on('exit', (code, sig) => {
-    if (stopping) return;
-    log(`${name} exited (${sig || code})`);
-    if (essential) shutdown(1);
+  proc.on('error', (e) => {
+    log(`${name}: ${e.message}`);
+    if (!proc.pid) onExit(c, proc, null, 'spawn failed'); // no 'exit' comes for a process that never ran
   });
-  children.push({ name, proc, essential });
-  watch(proc.pid);
-  return proc;
+  proc.on('exit', (code, sig) => onExit(c, proc, code, sig));
+  c.proc = proc;
+  c.held = false;
+  c.policy.started();
+  tellWatchdog('group', proc.pid);
+}
+
+/**
+ * A child's process ended. Ours to handle only if it is still the child's current process: a process we
+ * stopped ourselves (a dependent of a dead master, a superseded one) has been detached from its child first.
+ * @param {Child} c @param {import('node:child_process').ChildProcess} proc
+ * @param {number | null} code @param {string | null} sig
+ */
+function onExit(c, proc, code, sig) {
+  if (stopping || proc !== c.proc) return;
+  c.proc = null;
+  const why = sig || code;
+  if (code === CONFIG_ERROR) {
+    log(`${c.name} exited (${CONFIG_ERROR}): a configuration error (see above); not restarting it`);
+    shutdown(CONFIG_ERROR);
+    return;
+  }
+  const d = c.policy.crashed();
+  const span = seconds(d.windowMs);
+  if (d.giveUp) {
+    log(`giving up: ${c.name} crashed ${d.crashes} times in ${span}; last exit ${why}; see the lines above`);
+    shutdown(1);
+    return;
+  }
+  const core = c.name === 'roscore';
+  const deps = core ? [...children.values()].filter((x) => MASTER_DEPENDENTS.includes(x.name)) : [];
+  log(`${c.name} exited (${why}); restarting in ${seconds(d.delayMs)} (crash ${d.crashes} of ${d.maxCrashes} in ${span})`
+    + (deps.length ? `; then ${deps.map((x) => x.name).join(' and ')}, which must register with the new master` : ''));
+  restart(c, proc.pid, d.delayMs, deps).catch((e) => {
+    if (!stopping) { log(`restarting ${c.name} failed: ${e.stack || e}`); shutdown(1); }
+  });
+}
+
+/**
+ * Clear what is left of the dead child, wait out the back-off, start it again. For roscore: stop its
+ * dependents at once, and start them again once the new master answers.
+ * @param {Child} c @param {number | undefined} oldPgid @param {number} delayMs @param {Child[]} deps
+ */
+async function restart(c, oldPgid, delayMs, deps) {
+  const gen = ++c.gen;
+  const core = c.name === 'roscore';
+  if (core) coreDown = true;
+  const stops = deps.map((d) => {
+    d.gen++; // drop a restart of its own that may be pending
+    d.held = true;
+    const p = d.proc;
+    d.proc = null; // its exit is ours, not a crash
+    return clearChild(d.name, p?.pid, `${d.name} (its master died)`);
+  });
+  // (The dependents may take their time: only their own start waits for them to be gone.)
+  const stopped = Promise.all(stops);
+  stopped.catch(() => { /* awaited below, unless this restart is dropped first */ });
+  await Promise.all([clearChild(c.name, oldPgid, c.name), pause(delayMs)]);
+  if (stopping || gen !== c.gen) return;
+  if (coreDown && !core && MASTER_DEPENDENTS.includes(c.name)) { c.held = true; return; } // roscore's restart starts it
+  log(`starting ${c.name} again`);
+  spawnChild(c);
+  if (!core) return;
+  const up = await waitUntilAsync(() => masterOnline(env.rosMasterUri), 20_000);
+  if (stopping || gen !== c.gen) return;
+  if (!up) {
+    // Counts as a crash of roscore: its exit handler restarts it (and its dependents stay held).
+    log('the new roscore does not answer within 20 s; killing it');
+    signalGroup(c.proc?.pid, 'SIGKILL');
+    return;
+  }
+  await stopped;
+  if (stopping || gen !== c.gen) return;
+  coreDown = false;
+  const held = [...children.values()].filter((x) => x.held);
+  log(`the ROS master answers again${held.length ? `; starting ${held.map((x) => x.name).join(' and ')} again` : ''}`);
+  for (const x of held) spawnChild(x);
+}
+
+/** A back-off wait; ends early when the stack stops. @param {number} ms */
+function pause(ms) {
+  return new Promise((resolve) => {
+    const done = () => { clearTimeout(t); wakers.delete(done); resolve(undefined); };
+    const t = setTimeout(done, ms);
+    wakers.add(done);
+    if (stopping) done();
+  });
+}
+
+/**
+ * Stop whatever is left of one child: the members of its process group and the processes carrying its
+ * marker (SIGTERM, SIGKILL after a grace), and wait until they are gone.
+ * @param {string} name @param {number | undefined} pgid @param {string} what for the log
+ */
+async function clearChild(name, pgid, what) {
+  const left = () => stackProcs().filter((p) => p.child === name || (pgid && p.pgrp === pgid)).map((p) => p.pid);
+  let pids = left();
+  if (pids.length) {
+    signalGroup(pgid, 'SIGTERM');
+    pids.forEach((p) => signal(p, 'SIGTERM'));
+    await waitUntil(() => left().length === 0, CLEANUP_GRACE_MS);
+    pids = left();
+    if (pids.length) {
+      log(`${what}: ${pids.map(procName).join(', ')} still running ${seconds(CLEANUP_GRACE_MS)} after SIGTERM; killing ${pids.length === 1 ? 'it' : 'them'}`);
+      signalGroup(pgid, 'SIGKILL');
+      pids.forEach((p) => signal(p, 'SIGKILL'));
+      await waitUntil(() => left().length === 0, 1000);
+    }
+  }
+  if (pgid && !stackProcs().some((p) => p.pgrp === pgid)) tellWatchdog('forget', pgid);
+}
+
+/** A process as the log names it: its ROS node name, else its program. @param {number} pid */
+function procName(pid) {
+  try {
+    const argv = fs.readFileSync(`/proc/${pid}/cmdline`, 'latin1').split('\0').filter(Boolean);
+    const node = argv.find((a) => a.startsWith('__name:='));
+    return node ? node.slice('__name:='.length) : path.basename(argv[1]?.startsWith('/') ? argv[1] : argv[0] ?? String(pid));
+  } catch { return String(pid); }
 }
 
 async function waitFor(pred, timeoutMs, what) {
+  if (!(await waitUntilAsync(pred, timeoutMs))) {
+    if (stopping) throw new Error('stopping');
+    throw new Error(`timed out waiting for ${what}`);
+  }
+}
+
+/** Poll an async predicate every 100 ms; false on timeout; throws once the stack stops. */
+async function waitUntilAsync(pred, timeoutMs) {
   const end = Date.now() + timeoutMs;
   while (Date.now() < end) {
     if (stopping) throw new Error('stopping');
-    if (await pred()) return;
+    if (await pred()) return true;
     await new Promise((r) => setTimeout(r, 100));
   }
-  throw new Error(`timed out waiting for ${what}`);
+  return false;
 }
 
 const exited = (p) => p.exitCode !== null || p.signalCode !== null;
 const alive = (pid) => { try { process.kill(pid, 0); return true; } catch { return false; } };
+const signal = (pid, sig) => { try { process.kill(pid, sig); } catch { /* gone */ } };
+const signalGroup = (pgid, sig) => { if (pgid) signal(-pgid, sig); };
 
-/** Processes of this stack still running, found by the marker in their environment. */
-function markedPids() {
-  const pids = [];
+/**
+ * Live processes of this stack, found by the marker in their environment, with their process group and
+ * the child they belong to (CELL_STACK_CHILD).
+ * @returns {{pid: number, pgrp: number, child: string | null}[]}
+ */
+function stackProcs() {
+  const out = [];
   for (const d of fs.readdirSync('/proc')) {
     if (!/^\d+$/.test(d) || Number(d) === process.pid) continue;
     try {
-      if (fs.readFileSync(`/proc/${d}/environ`).includes(`CELL_STACK_ID=${STACK_ID}`)) pids.push(Number(d));
+      const environ = fs.readFileSync(`/proc/${d}/environ`, 'latin1');
+      if (!environ.includes(`CELL_STACK_ID=${STACK_ID}`)) continue;
+      const stat = fs.readFileSync(`/proc/${d}/stat`, 'latin1');
+      const [state, , pgrp] = stat.slice(stat.lastIndexOf(')') + 2).split(' ');
+      if (state === 'Z' || state === 'X') continue;
+      const child = environ.split('\0').find((e) => e.startsWith('CELL_STACK_CHILD='))?.slice('CELL_STACK_CHILD='.length) ?? null;
+      out.push({ pid: Number(d), pgrp: Number(pgrp), child });
     } catch { /* gone or not ours */ }
   }
-  return pids;
+  return out;
 }
+
+/** Processes of this stack still running, found by the marker in their environment. */
+const markedPids = () => stackProcs().map((p) => p.pid);
 
 async function shutdown(code = 0) {
   if (stopping) return;
   stopping = true;
+  for (const w of [...wakers]) w(); // a restart waiting out its back-off is dropped
   log('stopping...');
   const deadline = Date.now() + 4500;
-  const signalGroup = (p, sig) => { try { process.kill(-p.pid, sig); } catch { /* already gone */ } };
   // Front first (BFF, launch, sim), then the master, so nodes can unregister cleanly.
-  const front = children.filter((c) => c.name !== 'roscore');
-  front.forEach((c) => signalGroup(c.proc, 'SIGINT'));
-  await waitUntil(() => front.every((c) => exited(c.proc)), Math.min(3000, deadline - Date.now()));
-  const core = children.find((c) => c.name === 'roscore');
-  if (core) {
-    signalGroup(core.proc, 'SIGTERM');
-    await waitUntil(() => exited(core.proc), Math.max(200, deadline - Date.now() - 500));
+  const procs = (names) => [...children.values()].filter((c) => names(c.name) && c.proc).map((c) => /** @type {any} */ (c.proc));
+  const front = procs((n) => n !== 'roscore');
+  front.forEach((p) => signalGroup(p.pid, 'SIGINT'));
+  await waitUntil(() => front.every(exited), Math.min(3000, deadline - Date.now()));
+  const core = procs((n) => n === 'roscore');
+  if (core.length) {
+    core.forEach((p) => signalGroup(p.pid, 'SIGTERM'));
+    await waitUntil(() => core.every(exited), Math.max(200, deadline - Date.now() - 500));
   }
-  for (const pid of markedPids()) try { process.kill(pid, 'SIGKILL'); } catch { /* gone */ }
+  // Whatever is left: leftovers of a child that was being restarted, nodes that ignored the signal...
+  for (const pid of markedPids()) signal(pid, 'SIGKILL');
   await waitUntil(() => markedPids().every((p) => !alive(p)), 400);
   await stopWatchdog(Math.max(300, deadline - Date.now()));
   log('stopped');
@@ -177,18 +360,19 @@ async function main() {
     throw e;
   }
   if (await masterOnline(env.rosMasterUri)) {
-    log(`using the ROS master at ${env.rosMasterUri}`);
+    log(`using the ROS master at ${env.rosMasterUri} (not started here, so not restarted here either)`);
   } else {
     log(`starting roscore on port ${masterPort}`);
     startRos('roscore', `roscore -p ${masterPort}`);
-    await waitFor(() => masterOnline(env.rosMasterUri), 20000, 'roscore');
+    // (A roscore that dies meanwhile is restarted; its dependents are not started yet, so none are held.)
+    await waitFor(async () => !coreDown && (await masterOnline(env.rosMasterUri)), 60_000, 'roscore');
   }
   const simulated = cell.robot?.simulated !== false && process.env.UR_SIM !== '0';
   if (simulated && fs.existsSync(path.join(REPO_ROOT, 'sim/__main__.py'))) {
     log(`starting the simulated UR5 cell at ${urHost}`);
     // SIM_ARGS: extra `python -m sim` options, e.g. "--no-cameras" or "--camera-size 320x240".
     const extra = (process.env.SIM_ARGS || '').split(/\s+/).filter(Boolean).map(shellQuote).join(' ');
-    startRos('sim', `python -m sim --host ${shellQuote(urHost)} ${extra}`, false);
+    startRos('sim', `python -m sim --host ${shellQuote(urHost)} ${extra}`);
   } else {
     log(`robot: UR controller at ${urHost}`);
   }
@@ -197,9 +381,13 @@ async function main() {
   start('bff', process.execPath, [path.join(REPO_ROOT, 'bff/src/server.js')]);
   /** @returns {Promise<any>} */
   const health = async () => {
-    try { const r = await fetch(`http://127.0.0.1:${env.port}/api/health`); return r.ok ? await r.json() : null; } catch { return null; }
+    try {
+      const r = await fetch(`http://127.0.0.1:${env.port}/api/health`, { signal: AbortSignal.timeout(2000) });
+      return r.ok ? await r.json() : null;
+    } catch { return null; }
   };
-  await waitFor(async () => !!(await health()), 30000, 'the BFF');
+  // Long enough for a few restarts of a child that dies while starting (a crash loop ends the stack first).
+  await waitFor(async () => !!(await health()), 60_000, 'the BFF');
   try {
     await waitFor(async () => (await health())?.ros?.rosbridge === true, 30000, 'rosbridge');
   } catch (e) {

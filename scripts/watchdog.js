@@ -10,7 +10,8 @@
 // nothing is left (sweeping as above if something is) and exits at once.
 //
 // Usage: node scripts/watchdog.js <stack-id> <supervisor-pid> [pgid...]
-// stdin, one per line: `group <pgid>` (a child group started), `done` (clean shutdown finished).
+// stdin, one per line: `group <pgid>` (a child group started, restarts included), `forget <pgid>` (a dead
+// child's group is empty: the supervisor restarted that child under a new group), `done` (clean shutdown finished).
 import fs from 'node:fs';
 
 const GRACE_MS = 2000; // SIGTERM, then SIGKILL: everything is gone well within 5 s of the supervisor's death
@@ -43,6 +44,7 @@ process.stdin.on('data', (d) => {
   for (let i; (i = pending.indexOf('\n')) >= 0; pending = pending.slice(i + 1)) {
     const [cmd, arg] = pending.slice(0, i).trim().split(/\s+/);
     if (cmd === 'group' && validPid(Number(arg))) groups.add(Number(arg));
+    else if (cmd === 'forget') groups.delete(Number(arg));
     else if (cmd === 'done') clean = true;
   }
 });

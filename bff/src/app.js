@@ -17,7 +17,8 @@ import { RosHealth } from './core/ros/health.js';
 import { RosRelay } from './core/ros/relay.js';
 import { createOpGuard } from './core/ros/op-guard.js';
 import { requireSession, requirePage } from './core/http/guards.js';
-import { buildOpenApi, validateRequests } from './core/http/openapi.js';
+import { buildOpenApi, validateRequests, methodNotAllowed, STATE_CHANGING } from './core/http/openapi.js';
+import { httpError } from './core/http/errors.js';
 import { staticApp, contentSecurityPolicy } from './core/http/static.js';
 import { FEATURES } from './features/index.js';
 
@@ -80,7 +81,11 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     res.setHeader('Content-Security-Policy', csp);
     next();
   });
-  app.use('/api', express.json({ limit: '64kb' }));
+  // A documented path asked with a method the document does not declare there: 405 with Allow (OPTIONS: 204),
+  // before anything reads the body.
+  app.use(methodNotAllowed(openapi));
+  // JSON bodies of state-changing requests only (a GET's body is ignored, never a reason to fail).
+  app.use('/api', express.json({ limit: '64kb', type: (req) => STATE_CHANGING(req.method) && Boolean(/** @type {express.Request} */ (req).is('application/json')) }));
   app.use('/api', (req, res, next) => {
     // State-changing requests must come from our own origin (the cookie is SameSite=Strict too).
     if (req.method !== 'GET' && req.method !== 'HEAD' && !sameOrigin(req)) return res.status(403).json({ error: 'cross-origin request refused' });
@@ -92,7 +97,9 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     res.setHeader('Cache-Control', 'no-store');
     next();
   });
-  app.use(validateRequests(openapi));
+  // The features' bodies are validated after their page guard (below); the core's here.
+  const featurePaths = new Set(features.flatMap((f) => Object.keys(f.openapi || {})));
+  app.use(validateRequests(openapi, { include: (p) => !featurePaths.has(p) }));
   app.get('/api/health', async (req, res) => res.json(await healthReport()));
   app.get('/api/openapi.json', (req, res) => res.json(openapi));
   app.use(authRoutes({
@@ -108,17 +115,18 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     if (!f.routes) continue;
     app.use(f.routes({
       cell, section: cell[f.id], cellFile: env.cellConfig, env, users, audit, healthReport, log,
-      guard: [requireSession, requirePage(cell, f.id)],
+      guard: [requireSession, requirePage(cell, f.id), validateRequests(openapi, { include: (p) => featurePaths.has(p) })],
     }));
   }
-  app.use('/api', (req, res) => res.status(404).json({ error: `no such API: ${req.method} ${req.originalUrl}` }));
+  app.use('/api', (req, res) => res.status(404).json({ error: `no such API: ${req.method} ${req.originalUrl.slice(0, 300)}` }));
   app.use(...staticApp(env.appDir));
-  // Malformed JSON and other client errors: a clear message, never a stack trace.
+  // Client errors raised below the handlers (bad percent-encoding, body parser, multipart): their 4xx and a clear
+  // message. 500 only for real failures, logged, never with a stack trace in the answer.
   app.use((err, req, res, next) => {
     if (res.headersSent) return next(err);
-    const status = err.status || err.statusCode || 500;
-    if (status >= 500) log(`error on ${req.method} ${req.originalUrl}: ${err.stack || err}`);
-    res.status(status).json({ error: status >= 500 ? 'internal error' : err.type === 'entity.parse.failed' ? 'malformed JSON body' : err.message });
+    const e = httpError(err);
+    if (!e.clientError) log(`error on ${req.method} ${req.originalUrl}: ${err?.stack || err}`);
+    res.status(e.status).json({ error: e.message });
   });
 
   return { app, relay, cell, features, grants, openapi, users, tokens, audit, lease, initial, close: () => relay.close() };

@@ -10,6 +10,8 @@ import {
   goalStatusName,
 } from '../../src/lib/core/connection.svelte.js';
 import { makeFakeFactory, makeFakeTimers, flush, fakeConnection } from '../fakeRos.js';
+import { render } from 'svelte/server';
+import ConnStatus from '../../src/lib/ui/ConnStatus.svelte';
 
 function setup() {
   const f = makeFakeFactory();
@@ -36,6 +38,17 @@ describe('defaultRosUrl', () => {
     vi.stubGlobal('location', { protocol: 'https:', host: 'cell.local:8443' });
     expect(defaultRosUrl()).toBe('wss://cell.local:8443/ros');
     vi.unstubAllGlobals();
+  });
+});
+
+describe('ConnStatus', () => {
+  /** @param {{ state: import('../../src/lib/core/connection.svelte.js').LinkStatus }} props */
+  const shown = (props) => render(ConnStatus, { props: { testid: 'c', ...props } }).body.match(/data-testid="c"[^>]*>([^<]*)</)?.[1];
+
+  it('shows the status it is given, reconnecting included', () => {
+    for (const state of /** @type {const} */ (['connecting', 'connected', 'disconnected', 'reconnecting'])) {
+      expect(shown({ state })).toBe(state);
+    }
   });
 });
 
@@ -140,6 +153,42 @@ describe('RosConnection', () => {
     expect(conn.state).toBe('disconnected');
     rosList[0].emit('close');
     expect(timers.pending).toHaveLength(0);
+  });
+
+  it("a dropped link that was up reads 'reconnecting' (through every attempt) until it is connected again", async () => {
+    const { conn, rosList, timers } = setup();
+    conn.start();
+    expect(conn.status).toBe('connecting'); // the very first attempt
+    await flush();
+    rosList[0].emit('close');
+    expect(conn.status).toBe('disconnected'); // never connected yet: the backend may be off
+    timers.runNext();
+    await flush();
+    rosList[1].emit('connection');
+    expect([conn.state, conn.status, conn.wasConnected]).toEqual(['connected', 'connected', true]);
+    rosList[1].emit('close'); // e.g. the BFF was killed and the cell's supervisor restarts it
+    expect([conn.state, conn.status]).toEqual(['disconnected', 'reconnecting']);
+    expect(conn.downSince).not.toBeNull(); // the offline / last-known notices work as before
+    timers.runNext();
+    expect([conn.state, conn.status]).toEqual(['connecting', 'reconnecting']);
+    await flush();
+    rosList[2].emit('error'); // the BFF is not back yet
+    timers.runNext();
+    await flush();
+    expect(conn.status).toBe('reconnecting');
+    rosList[3].emit('connection');
+    expect([conn.state, conn.status, conn.downSince]).toEqual(['connected', 'connected', null]);
+  });
+
+  it("stop() (logout) forgets that the link was up: the next start reads 'connecting'", async () => {
+    const { conn, rosList } = setup();
+    conn.start();
+    await flush();
+    rosList[0].emit('connection');
+    conn.stop();
+    expect([conn.status, conn.wasConnected]).toEqual(['disconnected', false]);
+    conn.start();
+    expect(conn.status).toBe('connecting');
   });
 
   it('stop() during a backoff wait cancels the retry', async () => {

@@ -82,3 +82,43 @@ test('pages and config are filtered by role', () => {
   assert.equal(a.features.parameters.csv, undefined, 'paths on the robot PC stay there');
   assert.equal(a.features.database.directory, undefined);
 });
+
+// One mistake, a line or two: a oneOf/anyOf's other branches and its own "must match exactly one schema" are noise.
+const STEP = 'process.operations[0].steps[0]';
+const short = [
+  ['a typo in a move_named step', { move_named: 'home', speeed: 0.5 }, [`${STEP}: unknown field "speeed"`]],
+  ['a tool step without its action', { tool: 'gripper' }, [`${STEP}: missing field "action"`]],
+  ['a bad group name', { move_named: 'home', group: 'Bad Name' }, [`${STEP}.group: must match pattern "^[a-z][a-z0-9_-]*$"`]],
+  ['two kinds in one step', { move_named: 'home', tool: 'gripper', action: 'open' }, [`${STEP}: only one of "move_named", "tool" is allowed`]],
+  ['a step of no kind', { bogus: 1 }, [
+    `${STEP}: needs one of the fields "move_named", "move_relative", "move_pose", "tool", "wait_s", "wait_topic", "routine"`,
+    `${STEP}: unknown field "bogus"`]],
+  ['a text in an offset', { move_relative: [0, 0, 'x', 0, 0, 0] }, [`${STEP}.move_relative[2]: must be number or object`]],
+  ['a wait_topic without a condition', { wait_topic: '/x', field: 'data' }, [`${STEP}: needs one of the fields "equals", "above", "below"`]],
+  ['a negative wait', { wait_s: -1 }, [`${STEP}.wait_s: must be >= 0`]],
+];
+for (const [name, step, lines] of short) {
+  test(`schema errors are short: ${name}`, () => {
+    const d = demo();
+    d.process.operations[0].steps[0] = step;
+    assert.throws(() => validateCell(d, 'x.yaml', FEATURES), (e) => {
+      assert.deepEqual(e.problems, lines);
+      return true;
+    });
+  });
+}
+
+test('schema errors are short: a manual tool step and a parameter type rule', () => {
+  const d = demo();
+  d.manual.tools[0].actions[0].steps[0] = { digital_out: 9, value: true };
+  d.parameters.items[0].options = ['a'];
+  d.parameters.items[0].default = 'high';
+  assert.throws(() => validateCell(d, 'x.yaml', FEATURES), (e) => {
+    assert.deepEqual([...e.problems].sort(), [
+      'manual.tools[0].actions[0].steps[0].digital_out: must be <= 7',
+      'parameters.items[0].default: must be number',
+      'parameters.items[0].options: not allowed here',
+    ]);
+    return true;
+  });
+});

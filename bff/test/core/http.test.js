@@ -121,3 +121,34 @@ test('every API route of the app is in the OpenAPI document, and the document is
   assert.ok(api.length >= 7, `found routes: ${api}`);
   for (const r of api) assert.ok(documented.has(r), `${r} is not in the OpenAPI document`);
 });
+
+test('the document declares what the core answers around each operation, and the rules the code enforces', async () => {
+  const { FILE_NAME, DRIVE_ID, BACKUP_NAME, REL_PATH, REL_PATH_OR_ROOT } = await import('../../src/features/database/database-files.js');
+  const featurePaths = new Set(FEATURES.flatMap((f) => Object.keys(f.openapi || {})));
+  for (const [p, ops] of Object.entries(openapi.paths)) {
+    for (const [method, op] of Object.entries(ops)) {
+      const has = (s) => assert.ok(op.responses[s]?.description, `${method.toUpperCase()} ${p} declares ${s}`);
+      has(405);
+      assert.ok(op.responses[431], `${p}: 431 (Node's header size limit)`);
+      assert.ok(op.responses[405].headers.Allow, `${p}: 405 names the Allow header`);
+      const secured = op.security.length > 0 && op.security.every((s) => Object.keys(s).length > 0);
+      if (secured) has(401);
+      if (secured && featurePaths.has(p)) has(403);
+      if (method !== 'get') for (const s of [400, 403, 413, 415]) has(s);
+      if ((op.parameters || []).length) has(400);
+    }
+  }
+  const loginOp = openapi.paths['/api/auth/login'].post;
+  assert.ok(loginOp.responses[415] && loginOp.responses[429].headers['Retry-After']);
+  assert.equal(openapi.paths['/api/auth/logout'].post.responses[401], undefined, 'logout works without a session');
+  const db = openapi.paths;
+  assert.equal(db['/api/database/files/{name}/backups'].get.parameters[0].schema.pattern, FILE_NAME.pattern);
+  assert.equal(db['/api/database/files/{name}/backups'].get.parameters[0].schema.maxLength, FILE_NAME.maxLength);
+  const listing = db['/api/database/drives/{drive}/files'].get.parameters;
+  assert.equal(listing[0].schema.pattern, DRIVE_ID.pattern);
+  assert.equal(listing[1].schema.pattern, REL_PATH_OR_ROOT.pattern);
+  const fromDrive = db['/api/database/files/{name}/from-drive'].post.requestBody.content['application/json'].schema.properties;
+  assert.equal(fromDrive.drive.pattern, DRIVE_ID.pattern);
+  assert.equal(fromDrive.path.pattern, REL_PATH.pattern);
+  assert.equal(db['/api/database/files/{name}/restore'].post.requestBody.content['application/json'].schema.properties.backup.pattern, BACKUP_NAME.pattern);
+});

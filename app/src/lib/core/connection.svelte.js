@@ -17,6 +17,12 @@
  */
 
 /** @typedef {'connecting' | 'connected' | 'disconnected'} ConnState */
+/**
+ * What the connection indicator shows: the state, except that a link that was up and dropped reads
+ * 'reconnecting' (the backoff is bringing it back, e.g. while the cell's supervisor restarts a crashed
+ * BFF or rosbridge) until it is connected again.
+ * @typedef {ConnState | 'reconnecting'} LinkStatus
+ */
 
 /**
  * @typedef {object} RosLike  the subset of roslib's Ros we rely on
@@ -167,6 +173,8 @@ export class RosConnection {
    * @type {number | null}
    */
   downSince = $state(null);
+  /** The link has been up since start(): a drop now reads 'reconnecting'. Cleared by stop() (logout). */
+  wasConnected = $state(false);
 
   /** @type {Set<{ name: string, type: string, cb: (msg: any) => void, options: TopicOptions, topic: TopicLike | null, gen: number, wrapped?: (m: any) => void }>} */
   #subs = new Set();
@@ -221,6 +229,11 @@ export class RosConnection {
     return this.state === 'connected' && this.#ros !== null;
   }
 
+  /** For the connection indicator: 'reconnecting' when a link that was up is down. @returns {LinkStatus} */
+  get status() {
+    return this.state !== 'connected' && this.wasConnected ? 'reconnecting' : this.state;
+  }
+
   /** Start connecting (idempotent). Called once the user is logged in. */
   start() {
     if (this.#running) return;
@@ -240,6 +253,7 @@ export class RosConnection {
     this.#detachAll();
     this.state = 'disconnected';
     this.downSince = null;
+    this.wasConnected = false;
     try {
       ros?.close();
     } catch {
@@ -497,6 +511,7 @@ export class RosConnection {
       this.#attempt = 0;
       this.state = 'connected';
       this.downSince = null;
+      this.wasConnected = true;
       for (const a of this.#ads) this.#attachAd(a);
       for (const s of this.#subs) this.#attachSub(s);
     });

@@ -10,7 +10,9 @@ import { setSessionCookie, clearSessionCookie } from './session.js';
 export function authRoutes({ users, tokens, throttle, audit, onLogout }) {
   const r = Router();
   r.post('/api/auth/login', async (req, res) => {
-    const { username, password } = req.body;
+    // The document's validation ran before (400/415); still never trust the shape of a body here.
+    const { username, password } = req.body && typeof req.body === 'object' ? req.body : {};
+    if (typeof username !== 'string' || typeof password !== 'string') return res.status(400).json({ error: 'expected {"username": string, "password": string}' });
     const keys = [`user:${username}`, `ip:${req.ip}`];
     const entry = { user: String(username).slice(0, 64), role: null, ip: req.ip || null, op: 'login' };
     const wait = throttle.retryAfter(keys);

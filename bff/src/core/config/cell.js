@@ -60,7 +60,132 @@ function describe(err) {
   if (err.keyword === 'additionalProperties') return `${where}: unknown field "${err.params.additionalProperty}"`;
   if (err.keyword === 'required') return `${where}: missing field "${err.params.missingProperty}"`;
   if (err.keyword === 'enum') return `${where}: must be one of ${err.params.allowedValues.join(', ')}`;
+  if (err.keyword === 'false schema') return `${where}: not allowed here`; // e.g. `min` on a bool parameter
   return `${where}: ${err.message}`;
+}
+
+// ------------------------------------------------------------------------------------------ error reduction
+// ajv (allErrors) reports a value that fits none of a oneOf/anyOf's branches with every branch's errors and then the
+// combinator's own: one typo in a process step is 26 lines (`missing field "move_relative"`, `unknown field
+// "move_named"`, ...). specificErrors keeps the branch the value was meant to be (its type, its kind's key such as
+// `move_named`, the most keys it declares) and that branch's errors only; with no such branch, one line saying
+// which kinds there are. An if/then rule's own "must match "then" schema" goes when its then/else errors are there.
+
+/** @param {any} root @param {string} pointer "#/a/b" (schemaPath: URI-encoded) or "/a/b" (instancePath) */
+function atPointer(root, pointer, uri = false) {
+  let node = root;
+  for (const raw of pointer.replace(/^#/, '').split('/').slice(1)) {
+    let key = raw;
+    if (uri) {
+      try {
+        key = decodeURIComponent(raw);
+      } catch {
+        return undefined;
+      }
+    }
+    key = key.replace(/~1/g, '/').replace(/~0/g, '~');
+    if (node === null || typeof node !== 'object' || !Object.hasOwn(node, key)) return undefined;
+    node = node[key];
+  }
+  return node;
+}
+
+/** @param {unknown} v */
+function jsonType(v) {
+  if (v === null) return 'null';
+  if (Array.isArray(v)) return 'array';
+  if (typeof v === 'number') return Number.isInteger(v) ? 'integer' : 'number';
+  return typeof v;
+}
+
+/** @param {any} branch @returns {string[] | null} the JSON types a branch takes (null: any) */
+function branchTypes(branch) {
+  if (branch.type !== undefined) return [].concat(branch.type);
+  return branch.properties || branch.required ? ['object'] : null;
+}
+
+/** @param {any} branch @param {unknown} data */
+function fitsType(branch, data) {
+  const types = branchTypes(branch);
+  const t = jsonType(data);
+  return !types || types.includes(t) || (t === 'integer' && types.includes('number'));
+}
+
+const isObject = (/** @type {unknown} */ v) => jsonType(v) === 'object';
+const quoted = (/** @type {string[]} */ names) => names.map((n) => `"${n}"`).join(', ');
+
+/**
+ * Which branch of a failed oneOf/anyOf the value was meant to match: {pick} its index, or {lines} what to say
+ * instead ([] : keep ajv's own error).
+ * @param {any[]} branches @param {unknown} data @param {boolean} several more than one branch passed (oneOf)
+ * @returns {{ pick?: number, lines: { message: string, property?: string }[] }}
+ */
+function chooseBranch(branches, data, several) {
+  const fitting = branches.map((_, i) => i).filter((i) => fitsType(branches[i], data));
+  if (!fitting.length) {
+    const types = [...new Set(branches.flatMap((b) => branchTypes(b) || []))];
+    return { lines: types.length ? [{ message: `must be ${types.join(' or ')}` }] : [] };
+  }
+  if (fitting.length === 1 && !several) return { pick: fitting[0], lines: [] };
+  if (!isObject(data)) return { lines: [] };
+  const obj = /** @type {Record<string, unknown>} */ (data);
+  const kind = (/** @type {number} */ i) => branches[i].required?.[0];
+  const keyed = fitting.filter((i) => kind(i) !== undefined && Object.hasOwn(obj, kind(i)));
+  if (keyed.length > 1) return { lines: [{ message: `only one of ${quoted(keyed.map(kind))} is allowed` }] };
+  if (several) return { lines: [] };
+  if (keyed.length === 1) return { pick: keyed[0], lines: [] };
+  const declared = fitting.map((i) => Object.keys(obj).filter((k) => Object.hasOwn(branches[i].properties || {}, k)).length);
+  const best = Math.max(...declared);
+  if (best > 0 && declared.filter((n) => n === best).length === 1) return { pick: fitting[declared.indexOf(best)], lines: [] };
+  if (!fitting.every((i) => kind(i) !== undefined)) return { lines: [] };
+  const unknown = Object.keys(obj).filter((k) => fitting.every((i) => branches[i].additionalProperties === false
+    && !Object.hasOwn(branches[i].properties || {}, k)));
+  return {
+    lines: [
+      { message: `needs one of the fields ${quoted(fitting.map(kind))}` },
+      ...unknown.map((k) => ({ message: '', property: k })),
+    ],
+  };
+}
+
+/**
+ * The errors that say what is wrong (see above), in ajv's order, each once.
+ * @param {any[]} errors ajv's @param {any} schema the validated schema @param {unknown} doc the validated document
+ * @returns {any[]}
+ */
+export function specificErrors(errors, schema, doc) {
+  let list = [...errors];
+  const combinators = errors.filter((e) => e.keyword === 'oneOf' || e.keyword === 'anyOf').sort((a, b) => a.schemaPath.length - b.schemaPath.length);
+  for (const e of combinators) {
+    if (!list.includes(e)) continue; // inside a branch already dropped
+    const branches = atPointer(schema, e.schemaPath, true);
+    // A branch that is a $ref reports its errors under the referenced schema's path: leave those as they are.
+    if (!Array.isArray(branches) || branches.some((b) => !b || typeof b !== 'object' || b.$ref)) continue;
+    const at = e.instancePath;
+    const own = (/** @type {any} */ x) => x.schemaPath.startsWith(`${e.schemaPath}/`);
+    const below = (/** @type {any} */ x) => x.instancePath.startsWith(`${at}/`);
+    const choice = chooseBranch(branches, atPointer(doc, at), !!e.params?.passingSchemas);
+    if (choice.pick !== undefined) {
+      const branch = branches[choice.pick];
+      const mine = `${e.schemaPath}/${choice.pick}/`;
+      // Errors of a $ref inside a branch carry the $ref's schema path: keep those about a field the branch has.
+      const declares = (/** @type {any} */ x) => branch.additionalProperties !== false
+        || Object.hasOwn(branch.properties || {}, x.instancePath.slice(at.length + 1).split('/')[0]);
+      const kept = list.filter((x) => x !== e && (own(x) ? x.schemaPath.startsWith(mine) : !below(x) || declares(x)));
+      if (kept.some((x) => x.instancePath === at || below(x))) list = kept;
+      else list = kept.concat(e); // nothing specific left: ajv's own line
+    } else if (choice.lines.length) {
+      const lines = choice.lines.map((l) => (l.property !== undefined
+        ? { instancePath: at, schemaPath: e.schemaPath, keyword: 'additionalProperties', params: { additionalProperty: l.property }, message: '' }
+        : { instancePath: at, schemaPath: e.schemaPath, keyword: e.keyword, params: {}, message: l.message }));
+      const index = list.indexOf(e);
+      list = [...list.slice(0, index).filter((x) => !own(x) && !below(x)), ...lines, ...list.slice(index + 1).filter((x) => !own(x) && !below(x))];
+    }
+  }
+  // "must match "then" schema" repeats what the then/else errors under it say.
+  list = list.filter((x) => x.keyword !== 'if' || !list.some((y) => y !== x && y.keyword !== 'if'
+    && (y.instancePath === x.instancePath || y.instancePath.startsWith(`${x.instancePath}/`))));
+  return list;
 }
 
 /**
@@ -71,8 +196,8 @@ function describe(err) {
 export function validateCell(doc, file, features) {
   const validate = getValidator(features);
   if (!validate(doc)) {
-    // Only the deepest errors are useful; anyOf/oneOf parents just repeat them.
-    throw new CellConfigError(file, validate.errors.map(describe));
+    // Only the specific errors are useful: a oneOf/anyOf's other branches and its own line just repeat them.
+    throw new CellConfigError(file, [...new Set(specificErrors(validate.errors, validate.schema, doc).map(describe))]);
   }
   const cell = /** @type {any} */ (doc);
   const problems = [];

@@ -35,11 +35,19 @@ const core = {
           type: 'object', additionalProperties: false, required: ['username', 'password'],
           properties: { username: { type: 'string', minLength: 1, maxLength: 64 }, password: { type: 'string', minLength: 1, maxLength: 256 } },
         }) },
-        responses: { 200: { description: 'Logged in', ...json(user) }, 400: { description: 'Bad request', ...json(error) }, 401: { description: 'Wrong user name or password', ...json(error) } },
+        responses: {
+          200: { description: 'Logged in', ...json(user) },
+          401: { description: 'Wrong user name or password', ...json(error) },
+          429: {
+            description: 'Too many failed attempts for this user name or address; try again after Retry-After seconds',
+            headers: { 'Retry-After': { description: 'Seconds to wait', schema: { type: 'string', pattern: '^[0-9]+$' } } }, ...json(error),
+          },
+        },
       },
     },
     '/api/auth/logout': {
-      post: { summary: 'Log out; revokes the session token', security: [{ session: [] }], responses: { 204: { description: 'Logged out' } } },
+      // Works with or without a session (clears the cookie either way): the session is optional here.
+      post: { summary: 'Log out; revokes the session token', security: [{ session: [] }, {}], responses: { 204: { description: 'Logged out' } } },
     },
     '/api/auth/me': {
       get: { summary: 'Who is logged in', security: [{ session: [] }], responses: { 200: { description: 'The user', ...json(user) }, 401: unauthorized } },
@@ -69,50 +77,155 @@ const core = {
   },
 };
 
+/** Methods that change state: refused cross-origin (403), and their bodies are parsed (400/413/415). */
+export const STATE_CHANGING = (method) => !['get', 'head', 'options'].includes(method.toLowerCase());
+
+/** Does the operation require a session (no anonymous alternative in its security list)? */
+const requiresSession = (op) => Array.isArray(op.security) && op.security.length > 0 && op.security.every((s) => Object.keys(s).length > 0);
+
+/**
+ * The statuses every operation can answer because of what the core does around it, added from facts about the
+ * operation (its method, security, parameters, whether a feature's page guard stands before it). A status the
+ * operation already declares keeps its description, extended with the generic reason.
+ * @param {string} method @param {any} op @param {{feature: boolean}} o feature: served behind the page guard
+ */
+function completeOperation(method, op, { feature }) {
+  const responses = { ...op.responses };
+  const add = (status, description, extra = {}) => {
+    const had = responses[status];
+    if (!had) responses[status] = { description, ...extra, ...json(error) };
+    else if (!had.description.toLowerCase().includes(description.toLowerCase())) responses[status] = { ...had, description: `${had.description}; or: ${description}` };
+  };
+  const secured = requiresSession(op);
+  const params = (op.parameters || []).filter((p) => p.in === 'path' || p.in === 'query');
+  if (secured) add(401, 'Not logged in');
+  if (feature && secured) add(403, "The caller's role may not use this page");
+  if (STATE_CHANGING(method)) {
+    add(403, 'Cross-origin request refused (Origin names another host)');
+    add(400, 'Malformed or invalid request body');
+    add(413, 'Request body too large');
+    add(415, 'Unsupported content type, charset or content encoding');
+  }
+  if (params.length) add(400, params.some((p) => p.in === 'path') ? 'Invalid parameter (or malformed percent-encoding in the path)' : 'Invalid parameter');
+  add(405, 'Method not allowed on this path', { headers: { Allow: { description: 'The methods this path supports', schema: { type: 'string' } } } });
+  // Node's HTTP parser refuses a request line plus headers over its limit (16 kB) before the app sees it, empty body.
+  responses[431] ??= { description: 'Request line and headers too large (over 16 kB, e.g. a very long query or path)' };
+  return { ...op, responses };
+}
+
 /**
  * @param {import('../features/feature.js').Feature[]} features
  * @returns {typeof core}
  */
 export function buildOpenApi(features) {
-  const paths = { ...core.paths };
+  /** @type {Record<string, any>} */
+  const paths = {};
+  const put = (p, ops, feature) => {
+    paths[p] = Object.fromEntries(Object.entries(ops).map(([m, op]) => [m, completeOperation(m, op, { feature })]));
+  };
+  for (const [p, ops] of Object.entries(core.paths)) put(p, ops, false);
   for (const f of features) {
     for (const [p, ops] of Object.entries(f.openapi || {})) {
       if (paths[p]) throw new Error(`feature "${f.id}" declares ${p}, which is already in the document`);
-      paths[p] = ops;
+      put(p, ops, true);
     }
   }
   // This document's own path last, as before.
   const { '/api/openapi.json': self, ...rest } = paths;
-  return { ...core, paths: { ...rest, '/api/openapi.json': self } };
+  return /** @type {typeof core} */ ({ ...core, paths: { ...rest, '/api/openapi.json': self } });
 }
 
 /** Express path for an OpenAPI path ("/api/x/{id}" -> "/api/x/:id"). @param {string} p */
 export const expressPath = (p) => p.replace(/\{(\w+)\}/g, ':$1');
 
-/** Middleware validating JSON request bodies against the document (templated paths included). @param {typeof core} openapi */
-export function validateRequests(openapi) {
-  const ajv = new Ajv2020({ allErrors: true, strict: false });
-  /** @type {{method: string, re: RegExp, validate: import('ajv').ValidateFunction, required: boolean}[]} */
-  const routes = [];
-  for (const [p, ops] of Object.entries(openapi.paths)) {
-    for (const [method, op] of Object.entries(ops)) {
-      const body = /** @type {any} */ (op).requestBody;
-      const schema = body?.content?.['application/json']?.schema;
-      if (!schema) continue;
-      const re = new RegExp(`^${p.replace(/[.]/g, '\\.').replace(/\{\w+\}/g, '[^/]+')}$`);
-      routes.push({ method: method.toUpperCase(), re, validate: ajv.compile(schema), required: !!body.required });
+const escapeRe = (s) => s.replace(/[.*+?^${}()|[\]\\]/g, '\\$&');
+
+/**
+ * A request path matcher for an OpenAPI path that matches as Express 5 routes do by default: case-insensitive, an
+ * optional trailing slash, a template segment is one non-empty segment (still percent-encoded).
+ * @param {string} p
+ */
+export const pathRegExp = (p) => new RegExp(`^${p.split(/(\{\w+\})/).map((s) => (/^\{\w+\}$/.test(s) ? '[^/]+' : escapeRe(s))).join('')}/?$`, 'i');
+
+/**
+ * The document's operations, found by request method and path.
+ * @param {typeof core} openapi
+ */
+export function operations(openapi) {
+  const paths = Object.entries(openapi.paths).map(([p, ops]) => ({ path: p, ops: /** @type {Record<string, any>} */ (ops), re: pathRegExp(p) }));
+  return {
+    /** The documented paths a request path falls on. @param {string} reqPath */
+    paths: (reqPath) => paths.filter((x) => x.re.test(reqPath)),
+    /** The operation for a request, or null. @param {string} method @param {string} reqPath */
+    find(method, reqPath) {
+      const m = method.toLowerCase();
+      for (const x of paths) if (x.ops[m] && x.re.test(reqPath)) return { path: x.path, op: x.ops[m] };
+      return null;
+    },
+  };
+}
+
+/**
+ * Middleware validating JSON request bodies against the document (templated paths included). Validation comes after
+ * the access checks, so a caller who may not use a route learns nothing about its rules (and the route's own refusal,
+ * audited, is what it gets): an operation that needs a session is left to its route when there is none, and the
+ * features mount their own validator after their page guard (`include` picks the document paths one validator owns).
+ * @param {typeof core} openapi @param {{include?: (path: string) => boolean}} [o]
+ */
+export function validateRequests(openapi, { include = () => true } = {}) {
+  const ajv = new Ajv2020({ allErrors: true, strict: false, verbose: true });
+  const ops = operations(openapi);
+  /** @type {Map<object, import('ajv').ValidateFunction>} */
+  const validators = new Map();
+  for (const path of Object.values(openapi.paths)) {
+    for (const op of Object.values(path)) {
+      const schema = /** @type {any} */ (op).requestBody?.content?.['application/json']?.schema;
+      if (schema) validators.set(op, ajv.compile(schema));
     }
   }
   /** @type {import('express').RequestHandler} */
   return (req, res, next) => {
-    const r = routes.find((x) => x.method === req.method && x.re.test(req.path));
-    if (!r) return next();
-    if (!r.required && !Number(req.headers['content-length'] || 0) && !req.headers['transfer-encoding']) return next();
+    const found = ops.find(req.method, req.path);
+    const validate = found && include(found.path) && validators.get(found.op);
+    if (!validate) return next();
+    if (needsSession(found.op) && !req.session) return next();
+    const body = found.op.requestBody;
+    if (!body.required && !Number(req.headers['content-length'] || 0) && !req.headers['transfer-encoding']) return next();
     if (!req.is('application/json')) return res.status(415).json({ error: 'expected application/json' });
-    if (!r.validate(req.body)) {
-      const e = r.validate.errors[0];
-      return res.status(400).json({ error: `invalid request body${e.instancePath ? ' at ' + e.instancePath : ''}: ${e.message}` });
+    if (!validate(req.body)) {
+      const e = validate.errors[0];
+      // A pattern is long and says little to a user: name the rule's description or the field instead.
+      const why = e.keyword === 'pattern' ? `does not have the required form${e.parentSchema?.description ? ` (${e.parentSchema.description})` : ''}` : e.message;
+      return res.status(400).json({ error: `invalid request body${e.instancePath ? ' at ' + e.instancePath : ''}: ${why}` });
     }
     next();
+  };
+}
+
+/** An operation whose every security alternative names the session (logout's `{}` alternative makes it optional). @param {any} op */
+const needsSession = (op) => Array.isArray(op.security) && op.security.length > 0 && op.security.every((alt) => 'session' in alt);
+
+/**
+ * For a documented path asked with a method the document does not declare there: 405 with an Allow header (OPTIONS
+ * answers 204 with it). Mounted before the routes, so the document decides; requests with a declared method and
+ * requests on undocumented paths go on (to their route, or to the 404).
+ * @param {typeof core} openapi
+ * @returns {import('express').RequestHandler}
+ */
+export function methodNotAllowed(openapi) {
+  const ops = operations(openapi);
+  return (req, res, next) => {
+    const hits = ops.paths(req.path);
+    if (!hits.length) return next();
+    const methods = new Set(hits.flatMap((h) => Object.keys(h.ops).map((m) => m.toUpperCase())));
+    // HEAD is answered by GET routes.
+    if (methods.has(req.method) || (req.method === 'HEAD' && methods.has('GET'))) return next();
+    if (methods.has('GET')) methods.add('HEAD');
+    methods.add('OPTIONS');
+    const allow = [...methods].join(', ');
+    res.setHeader('Allow', allow);
+    res.setHeader('Cache-Control', 'no-store');
+    if (req.method === 'OPTIONS') return res.status(204).end();
+    res.status(405).json({ error: `method ${req.method} is not allowed on ${req.path.slice(0, 200)} (allowed: ${allow})` });
   };
 }

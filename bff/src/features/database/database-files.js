@@ -38,6 +38,39 @@ export function resolveUsbRoots(envValue, cell) {
   return cell?.database?.usb_roots?.length ? cell.database.usb_roots : DEFAULT_USB_ROOTS;
 }
 
+// The names and paths the API takes, as JSON Schema string rules: the checks below and the OpenAPI document
+// (routes.js) both use these, so the document states exactly what the code enforces.
+// (No lookaheads in the patterns: every JSON Schema tool and test generator understands them.)
+const NOT_SEP = '[^/\\\\\\u0000]'; // any character but '/', '\' and NUL
+/** A segment or name that is not '', '.' or '..'. */
+const SEGMENT = `(?:[^./\\\\\\u0000]|\\.[^./\\\\\\u0000]|\\.\\.${NOT_SEP})${NOT_SEP}*`;
+
+/** A database file (cell file `database.files`, the same pattern as the cell schema's fileName). */
+export const FILE_NAME = Object.freeze({ type: 'string', minLength: 1, maxLength: 255, pattern: '^[A-Za-z0-9][A-Za-z0-9_.-]*$' });
+/** A drive id as listDrives makes them: "<root index>:<dir>[:<dir>]"; no '/', '\', NUL, '..'; at most 255 UTF-8 bytes. */
+export const DRIVE_ID = Object.freeze({ type: 'string', minLength: 3, maxLength: 255, pattern: `^[0-9]+:(?:\\.?[^./\\\\\\u0000])+\\.?$` });
+/** A backup as #backup names them: "<file>.<ISO time>[-n]" (ASCII letters, digits, '_', '.', ':', '-'). */
+export const BACKUP_NAME = Object.freeze({ type: 'string', minLength: 3, maxLength: 255, pattern: '^[A-Za-z0-9][A-Za-z0-9_.:-]*$' });
+/** A path relative to a drive root: segments separated by '/', none empty, '.' or '..', no '\' or NUL; trailing '/' allowed. */
+export const REL_PATH = Object.freeze({ type: 'string', minLength: 1, maxLength: 4096, pattern: `^${SEGMENT}(?:/${SEGMENT})*/*$` });
+/** REL_PATH or '' (the drive root). */
+export const REL_PATH_OR_ROOT = Object.freeze({ type: 'string', maxLength: 4096, pattern: `^(?:${SEGMENT}(?:/${SEGMENT})*/*)?$` });
+
+/** @type {WeakMap<object, RegExp>} */
+const compiled = new WeakMap();
+/**
+ * Does s satisfy a string rule above (lengths in code points, as JSON Schema counts them)?
+ * @param {{minLength?: number, maxLength?: number, pattern: string}} rule @param {unknown} s
+ */
+export function satisfies(rule, s) {
+  if (typeof s !== 'string') return false;
+  const n = [...s].length;
+  if (n < (rule.minLength ?? 0) || n > (rule.maxLength ?? Infinity)) return false;
+  let re = compiled.get(rule);
+  if (!re) compiled.set(rule, (re = new RegExp(rule.pattern, 'u')));
+  return re.test(s);
+}
+
 /**
  * A single file or drive name: no '/', '\', NUL, no '..', not '.', not empty, at most 255 bytes.
  * @param {unknown} s
@@ -48,14 +81,11 @@ export function isSafeName(s) {
 }
 
 /**
- * A relative path inside a drive: segments separated by '/', none empty, '.', '..', with NUL or '\'.
+ * A relative path inside a drive (REL_PATH): segments separated by '/', none empty, '.', '..', with NUL or '\'.
  * @param {unknown} p @param {boolean} allowEmpty
  */
 export function isSafeRelPath(p, allowEmpty = false) {
-  if (typeof p !== 'string') return false;
-  if (p === '') return allowEmpty;
-  if (p.length > 4096 || p.startsWith('/') || /[\0\\]/.test(p)) return false;
-  return p.replace(/\/+$/, '').split('/').every((seg) => seg !== '' && seg !== '.' && seg !== '..');
+  return satisfies(allowEmpty ? REL_PATH_OR_ROOT : REL_PATH, p);
 }
 
 /** @param {string} root @param {string} p `p` is `root` or below it (both real paths). */
@@ -196,7 +226,7 @@ export class DatabaseFiles {
     this.#target(target);
     const out = [];
     for (const e of await readdirOrEmpty(this.backupDir)) {
-      if (!e.isFile() || !e.name.startsWith(`${target}.`) || e.name.endsWith('.tmp')) continue;
+      if (!e.isFile() || !isBackupOf(target, e.name) || e.name.endsWith('.tmp')) continue;
       const st = await statOrNull(path.join(this.backupDir, e.name));
       if (st) out.push({ name: e.name, size: st.size, mtime: st.mtime.toISOString() });
     }
@@ -207,8 +237,8 @@ export class DatabaseFiles {
   async restoreBackup(target, backupName, user) {
     return this.#audited('database.restore', target, user, `backup ${backupName}`, async () => {
       this.#target(target);
-      if (typeof backupName !== 'string' || !backupName.startsWith(`${target}.`) || !isSafeName(backupName.slice(target.length + 1))) {
-        throw new DatabaseError(400, 'invalid backup name');
+      if (!isBackupOf(target, backupName)) {
+        throw new DatabaseError(400, `invalid backup name: expected ${target}.<time> as listed by GET .../backups`);
       }
       const src = path.join(this.backupDir, backupName);
       const st = await fsp.lstat(src).catch(() => null);
@@ -222,7 +252,7 @@ export class DatabaseFiles {
 
   #target(name) {
     if (this.targets.includes(name)) return; // the cell file's names are checked by its schema
-    if (!isSafeName(name)) throw new DatabaseError(400, 'invalid file name');
+    if (!satisfies(FILE_NAME, name) || !isSafeName(name)) throw new DatabaseError(400, 'invalid file name');
     throw new DatabaseError(404, `${name} is not a database file of this cell`);
   }
 
@@ -234,7 +264,7 @@ export class DatabaseFiles {
 
   /** @returns {Promise<Drive & {real: string}>} */
   async #drive(id) {
-    if (!isSafeName(id)) throw new DatabaseError(400, 'invalid drive id');
+    if (!satisfies(DRIVE_ID, id) || !isSafeName(id)) throw new DatabaseError(400, 'invalid drive id');
     const d = (await this.listDrives()).find((x) => x.id === id);
     if (!d) throw new DatabaseError(404, `no drive ${id}`);
     try {
@@ -250,7 +280,9 @@ export class DatabaseFiles {
     try {
       real = await fsp.realpath(path.join(root, rel));
     } catch (e) {
-      if (e.code === 'ENOENT' || e.code === 'ENOTDIR') throw new DatabaseError(404, `no such file on the drive: ${rel}`);
+      // Names too long for the file system and symbolic-link loops cannot name a file there either.
+      if (['ENOENT', 'ENOTDIR', 'ENAMETOOLONG', 'ELOOP'].includes(e.code)) throw new DatabaseError(404, `no such file on the drive: ${rel.slice(0, 300)}`);
+      if (e.code === 'EACCES' || e.code === 'EPERM') throw new DatabaseError(403, `not readable on the drive: ${rel.slice(0, 300)}`);
       throw e;
     }
     if (!inside(root, real)) throw new DatabaseError(403, 'the path leads outside the drive');
@@ -356,6 +388,9 @@ export class DatabaseFiles {
     for (const b of all.slice(this.keepBackups)) await this.fs.rm(path.join(this.backupDir, b.name), { force: true });
   }
 }
+
+/** A backup name of that target: "<target>.<suffix>" (BACKUP_NAME), the suffix a single safe name. */
+const isBackupOf = (target, name) => satisfies(BACKUP_NAME, name) && name.startsWith(`${target}.`) && isSafeName(name.slice(target.length + 1));
 
 const tooLarge = (max) => new DatabaseError(413, `the file is larger than the limit of ${max} bytes`);
 

@@ -3,7 +3,8 @@ import fsp from 'node:fs/promises';
 import path from 'node:path';
 import express, { Router } from 'express';
 import multer from 'multer';
-import { DatabaseError } from './database-files.js';
+import { DatabaseError, FILE_NAME, DRIVE_ID, BACKUP_NAME, REL_PATH, REL_PATH_OR_ROOT } from './database-files.js';
+import { httpError, multipartError } from '../../core/http/errors.js';
 
 /**
  * @param {{service: import('./database-files.js').DatabaseFiles, guard: import('express').RequestHandler[],
@@ -77,9 +78,7 @@ export function databaseRoutes({ service, guard, uploadDir, log = (m) => console
       received = true;
       result = await service.replaceFromUpload(param(req, 'name'), req.file.path, req.file.originalname, actor(req));
     } catch (e) {
-      error = e instanceof multer.MulterError
-        ? (e.code === 'LIMIT_FILE_SIZE' ? tooLarge(service.maxBytes) : new DatabaseError(400, `bad upload: ${e.message}`))
-        : e;
+      error = e instanceof DatabaseError || received ? e : uploadError(e, service.maxBytes);
       if (!received && error instanceof DatabaseError) {
         const a = actor(req);
         service.audit?.record({ user: a.username, role: a.role, ip: a.ip, op: 'database.replace', target: String(param(req, 'name')), outcome: 'denied', detail: `upload: ${error.message}` });
@@ -100,22 +99,39 @@ const param = (req, k) => String(req.params[k]);
 
 const tooLarge = (max) => new DatabaseError(413, `the file is larger than the limit of ${max} bytes`);
 
-function sendError(res, e, log) {
-  if (res.headersSent) return;
-  if (e instanceof DatabaseError) return res.status(e.status).json({ error: e.message });
-  if (e?.type === 'entity.parse.failed') return res.status(400).json({ error: 'malformed JSON body' });
-  log(`database: ${e?.stack || e}`);
-  res.status(500).json({ error: 'internal error' });
+/**
+ * What went wrong while receiving a multipart body: multer's limits and busboy's parse errors are the client's
+ * (400, 413), file-system errors while spooling stay server errors. @param {any} e @param {number} max
+ */
+function uploadError(e, max) {
+  if (e?.code === 'LIMIT_FILE_SIZE') return tooLarge(max);
+  const m = multipartError(e);
+  if (!m.clientError) return e;
+  const hint = ['LIMIT_UNEXPECTED_FILE', 'LIMIT_FILE_COUNT'].includes(e?.code) ? '; send one file, in the field "file"' : '';
+  return new DatabaseError(m.status, `${m.message}${hint}`);
 }
 
-/** OpenAPI 3.1 path objects for these routes; the core merges every feature's into the document. */
+function sendError(res, e, log) {
+  if (res.headersSent) return;
+  if (e instanceof DatabaseError && e.status < 500) return res.status(e.status).json({ error: e.message });
+  const h = httpError(e);
+  if (h.clientError) return res.status(h.status).json({ error: h.message });
+  log(`database: ${e?.stack || e}`);
+  // A failed write says what failed (the old file is unchanged); other failures stay 'internal error'.
+  res.status(500).json({ error: e instanceof DatabaseError ? e.message : 'internal error' });
+}
+
+/**
+ * OpenAPI 3.1 path objects for these routes; the core merges every feature's into the document and adds what the
+ * core answers around them (401, 403 page/cross-origin, 400/413/415 on bodies, 405). Names, drive ids, backups and
+ * paths use the rules the checks use (database-files.js).
+ */
 export const databaseOpenApiPaths = (() => {
   const json = (schema) => ({ content: { 'application/json': { schema } } });
   const error = { type: 'object', required: ['error'], properties: { error: { type: 'string' } } };
   const err = (description) => ({ description, ...json(error) });
-  const common = { 401: err('Not logged in'), 403: err('Role may not use the database page') };
-  const name = { name: 'name', in: 'path', required: true, description: 'A file listed in the cell file (database.files)', schema: { type: 'string', pattern: '^[A-Za-z0-9][A-Za-z0-9_.-]*$' } };
-  const drive = { name: 'drive', in: 'path', required: true, description: 'Drive id from GET /api/database/drives', schema: { type: 'string' } };
+  const name = { name: 'name', in: 'path', required: true, description: 'A file listed in the cell file (database.files)', schema: { ...FILE_NAME } };
+  const drive = { name: 'drive', in: 'path', required: true, description: 'Drive id from GET /api/database/drives (at most 255 bytes in UTF-8)', schema: { ...DRIVE_ID } };
   const target = {
     type: 'object', required: ['name', 'size', 'mtime', 'exists'],
     properties: { name: { type: 'string' }, size: { type: ['integer', 'null'] }, mtime: { type: ['string', 'null'], format: 'date-time' }, exists: { type: 'boolean' } },
@@ -124,16 +140,13 @@ export const databaseOpenApiPaths = (() => {
     type: 'object', required: ['file', 'backup'],
     properties: { file: target, backup: { type: ['string', 'null'], description: 'Name of the backup of the old file (null when there was none)' } },
   };
-  const writeErrors = {
-    ...common,
-    400: err('Bad input (names, paths)'), 404: err('Unknown file, drive, path or backup'), 413: err('File larger than database.max_upload_bytes'),
-    415: err('Wrong file extension or content type'), 422: err('Content does not parse (CSV, JSON, YAML)'), 500: err('Writing failed; the old file is unchanged'),
-  };
+  const outside = err('Role may not use the database page, or the path leads outside the drive (symbolic links) or is not readable');
+  const writeFailed = err('Writing failed; the old file is unchanged');
   return {
     '/api/database/files': {
       get: {
         summary: 'Database files that may be replaced', security: [{ session: [] }],
-        responses: { 200: { description: 'Files', ...json({ type: 'object', required: ['files'], properties: { max_upload_bytes: { type: 'integer' }, files: { type: 'array', items: target } } }) }, ...common },
+        responses: { 200: { description: 'Files', ...json({ type: 'object', required: ['files'], properties: { max_upload_bytes: { type: 'integer' }, files: { type: 'array', items: target } } }) } },
       },
     },
     '/api/database/drives': {
@@ -141,16 +154,15 @@ export const databaseOpenApiPaths = (() => {
         summary: 'USB drives currently present', security: [{ session: [] }],
         responses: {
           200: { description: 'Drives', ...json({ type: 'object', required: ['drives'], properties: { drives: { type: 'array', items: {
-            type: 'object', required: ['id', 'label', 'path'], properties: { id: { type: 'string' }, label: { type: 'string' }, path: { type: 'string' } },
+            type: 'object', required: ['id', 'label', 'path'], properties: { id: { type: 'string', description: 'The id the drive routes take' }, label: { type: 'string' }, path: { type: 'string' } },
           } } } }) },
-          ...common,
         },
       },
     },
     '/api/database/drives/{drive}/files': {
       get: {
         summary: 'Directories and files on a drive', security: [{ session: [] }],
-        parameters: [drive, { name: 'path', in: 'query', required: false, description: 'Directory relative to the drive root', schema: { type: 'string' } }],
+        parameters: [drive, { name: 'path', in: 'query', required: false, description: 'Directory relative to the drive root (empty: the root)', schema: { ...REL_PATH_OR_ROOT } }],
         responses: {
           200: { description: 'Listing', ...json({ type: 'object', required: ['drive', 'path', 'entries'], properties: {
             drive: { type: 'string' }, path: { type: 'string' },
@@ -159,7 +171,7 @@ export const databaseOpenApiPaths = (() => {
               targets: { type: 'array', items: { type: 'string' }, description: 'Database files this file could replace (same extension)' },
             } } },
           } }) },
-          ...common, 400: err('Bad path'), 404: err('Unknown drive or path'),
+          400: err('Invalid drive id or path, or not a directory'), 403: outside, 404: err('Unknown drive or path'),
         },
       },
     },
@@ -168,8 +180,13 @@ export const databaseOpenApiPaths = (() => {
         summary: 'Replace a database file with a file from a USB drive (old file kept as a backup)', security: [{ session: [] }],
         parameters: [name],
         requestBody: { required: true, ...json({ type: 'object', additionalProperties: false, required: ['drive', 'path'],
-          properties: { drive: { type: 'string', minLength: 1 }, path: { type: 'string', minLength: 1, description: 'File path relative to the drive root' } } }) },
-        responses: { 200: { description: 'Replaced', ...json(replaced) }, ...writeErrors },
+          properties: { drive: { ...DRIVE_ID, description: 'Drive id from GET /api/database/drives' }, path: { ...REL_PATH, description: 'File path relative to the drive root' } } }) },
+        responses: {
+          200: { description: 'Replaced', ...json(replaced) },
+          400: err('Invalid name, drive id or path, or not a file'), 403: outside, 404: err('Unknown file, drive or path'),
+          413: err('File larger than database.max_upload_bytes'), 415: err('Wrong file extension'),
+          422: err('Content does not parse (CSV, JSON, YAML)'), 500: writeFailed,
+        },
       },
     },
     '/api/database/files/{name}/upload': {
@@ -177,7 +194,12 @@ export const databaseOpenApiPaths = (() => {
         summary: 'Replace a database file with an uploaded file (old file kept as a backup)', security: [{ session: [] }],
         parameters: [name],
         requestBody: { required: true, content: { 'multipart/form-data': { schema: { type: 'object', required: ['file'], properties: { file: { type: 'string', format: 'binary' } } } } } },
-        responses: { 200: { description: 'Replaced', ...json(replaced) }, ...writeErrors },
+        responses: {
+          200: { description: 'Replaced', ...json(replaced) },
+          400: err('Invalid name; no file in the field "file"; a malformed multipart body; more than one file, or too many fields'),
+          404: err('Unknown file'), 413: err('File larger than database.max_upload_bytes'),
+          415: err('Not multipart/form-data, or wrong file extension'), 422: err('Content does not parse (CSV, JSON, YAML)'), 500: writeFailed,
+        },
       },
     },
     '/api/database/files/{name}/backups': {
@@ -186,9 +208,9 @@ export const databaseOpenApiPaths = (() => {
         parameters: [name],
         responses: {
           200: { description: 'Backups', ...json({ type: 'object', required: ['backups'], properties: { backups: { type: 'array', items: {
-            type: 'object', required: ['name', 'size', 'mtime'], properties: { name: { type: 'string' }, size: { type: 'integer' }, mtime: { type: 'string', format: 'date-time' } },
+            type: 'object', required: ['name', 'size', 'mtime'], properties: { name: { ...BACKUP_NAME }, size: { type: 'integer' }, mtime: { type: 'string', format: 'date-time' } },
           } } } }) },
-          ...common, 400: err('Bad name'), 404: err('Unknown file'),
+          400: err('Invalid name'), 404: err('Unknown file'),
         },
       },
     },
@@ -196,8 +218,12 @@ export const databaseOpenApiPaths = (() => {
       post: {
         summary: 'Restore a backup (the current file is backed up first)', security: [{ session: [] }],
         parameters: [name],
-        requestBody: { required: true, ...json({ type: 'object', additionalProperties: false, required: ['backup'], properties: { backup: { type: 'string', minLength: 1 } } }) },
-        responses: { 200: { description: 'Restored', ...json(replaced) }, ...writeErrors },
+        requestBody: { required: true, ...json({ type: 'object', additionalProperties: false, required: ['backup'],
+          properties: { backup: { ...BACKUP_NAME, description: 'A backup of this file, as listed by GET .../backups ("<name>.<time>")' } } }) },
+        responses: {
+          200: { description: 'Restored', ...json(replaced) },
+          400: err('Invalid name or backup name'), 404: err('Unknown file or backup'), 500: writeFailed,
+        },
       },
     },
   };

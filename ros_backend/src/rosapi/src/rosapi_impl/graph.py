@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import fnmatch
 import json
+import threading
 from typing import Any, Dict, List, Optional, Tuple
 
 import genpy
@@ -12,14 +13,16 @@ import rosservice
 
 from rosapi.msg import TypeDef
 
-_master: Optional[rosgraph.Master] = None
+# One master proxy per thread: rospy serves each service call on its own thread, and a proxy's XML-RPC connection
+# (http.client) is not safe to share: concurrent calls failed with "Request-sent" / "Idle" errors under load.
+_local = threading.local()
 
 
 def master() -> rosgraph.Master:
-    global _master
-    if _master is None:
-        _master = rosgraph.Master("/rosapi")
-    return _master
+    m: Optional[rosgraph.Master] = getattr(_local, "master", None)
+    if m is None:
+        m = _local.master = rosgraph.Master("/rosapi")
+    return m
 
 
 def system_state() -> Tuple[List[Any], List[Any], List[Any]]:
