@@ -23,6 +23,7 @@ import { loadCell, CellConfigError } from '../bff/src/core/config/cell.js';
 import { FEATURES } from '../bff/src/features/index.js';
 import { launchFiles } from './feature-launch.js';
 import { masterOnline } from '../bff/src/core/ros/health.js';
+import { resolveHosts, armsOf } from '../bff/src/core/config/hosts.js';
 import { RestartPolicy, seconds } from './supervise/restart-policy.js';
 
 const env = readEnv();
@@ -353,12 +354,18 @@ setInterval(() => { if (process.ppid !== parent) shutdown(1); }, 500).unref();
 
 async function main() {
   let cell;
+  /** @type {{host: string, groups: string[]}[]} */
+  let arms;
   try {
     cell = loadCell(env.cellConfig, FEATURES);
+    arms = armsOf(resolveHosts(cell.manual, process.env));
   } catch (e) {
     if (e instanceof CellConfigError) { console.error(e.message); process.exit(2); }
+    if (e instanceof Error && /^(UR_HOSTS?|manual\.groups)/.test(e.message)) { console.error(`${env.cellConfig}: ${e.message}`); process.exit(2); }
     throw e;
   }
+  // One UR controller per arm (each at its own address); a cell without motion groups has the one at UR_HOST.
+  const where = arms.length ? arms.map((a) => `${a.host} (${a.groups.join(', ')})`).join(' and ') : urHost;
   if (await masterOnline(env.rosMasterUri)) {
     log(`using the ROS master at ${env.rosMasterUri} (not started here, so not restarted here either)`);
   } else {
@@ -369,12 +376,17 @@ async function main() {
   }
   const simulated = cell.robot?.simulated !== false && process.env.UR_SIM !== '0';
   if (simulated && fs.existsSync(path.join(REPO_ROOT, 'sim/__main__.py'))) {
-    log(`starting the simulated UR5 cell at ${urHost}`);
+    log(`starting the simulated cell: ${arms.length > 1 ? 'UR controllers' : 'the UR controller'} at ${where}`);
     // SIM_ARGS: extra `python -m sim` options, e.g. "--no-cameras" or "--camera-size 320x240".
     const extra = (process.env.SIM_ARGS || '').split(/\s+/).filter(Boolean).map(shellQuote).join(' ');
-    startRos('sim', `python -m sim --host ${shellQuote(urHost)} ${extra}`);
+    // One sim process, one physics world for every arm (a hand-over needs both arms in one world), one controller
+    // emulator per arm on that arm's address.
+    const hosts = arms.length > 1
+      ? `--hosts ${shellQuote(arms.map((a) => `${a.groups[0]}=${a.host}`).join(','))}`
+      : `--host ${shellQuote(arms[0]?.host ?? urHost)}`;
+    startRos('sim', `python -m sim ${hosts} ${extra}`);
   } else {
-    log(`robot: UR controller at ${urHost}`);
+    log(`robot: ${arms.length > 1 ? 'UR controllers' : 'UR controller'} at ${where}`);
   }
   const launches = launchFiles(cell, path.join(REPO_ROOT, 'ros_backend/src/cell_bringup')).map(shellQuote).join(' ');
   startRos('ros', `roslaunch --wait ${launches} cell_config:=${shellQuote(env.cellConfig)} rosbridge_port:=${env.rosbridgePort}`);

@@ -1,7 +1,7 @@
 """The sim's camera viewpoints (VIEWS), rendered in a separate process so physics keeps real time.
 
-The cell file's video streams choose among these viewpoints (sim/cell_file.py); several streams may show one
-viewpoint, which is then rendered once. The render process holds a replica of the cell (same construction
+The cell file's video streams choose among these viewpoints and the cell's own (`simulation.views`,
+sim/cell_file.py); several streams may show one viewpoint, which is then rendered once. The render process holds a replica of the cell (same construction
 code, no physics stepping). At the camera rate the main process sends it a snapshot of joint positions and
 part poses and the viewpoints wanted; it renders those (EGL renderer plugin when it loads, TinyRenderer
 otherwise), JPEG-encodes them and sends the bytes back.
@@ -39,7 +39,15 @@ VIEWS: dict[str, CameraSpec] = {cam.name: cam for cam in (
 )}
 
 
-def _render_main(conn, seed: int, urdf_path: str, size: tuple[int, int]) -> None:
+def viewpoints(world_spec=None) -> dict[str, CameraSpec]:
+    """The built-in viewpoints, then the world's own (`simulation.views`)."""
+    out = dict(VIEWS)
+    for v in getattr(world_spec, "views", ()) or ():
+        out[v.name] = CameraSpec(v.name, tuple(v.eye), tuple(v.target), v.fov)
+    return out
+
+
+def _render_main(conn, seed: int, urdf_dir: str, size: tuple[int, int], world_spec=None) -> None:
     """Render process: build the replica, then answer (snapshot, view names) -> [(view, jpeg, ms)] until told to stop."""
     import os
     import signal
@@ -54,14 +62,15 @@ def _render_main(conn, seed: int, urdf_path: str, size: tuple[int, int]) -> None
     import pybullet
     from PIL import Image
 
+    from .scene import DEFAULT_WORLD
     from .world import World
 
-    world = World(seed=seed, render_only=True, urdf_path=urdf_path)
+    world = World(seed=seed, render_only=True, urdf_dir=urdf_dir, spec=world_spec or DEFAULT_WORLD)
     p = world.p
     renderer = pybullet.ER_BULLET_HARDWARE_OPENGL if world.egl else pybullet.ER_TINY_RENDERER
     w, h = size
     views = []
-    for cam in VIEWS.values():
+    for cam in viewpoints(world_spec).values():
         views.append((cam.name, p.computeViewMatrix(cam.eye, cam.target, (0, 0, 1)),
                       p.computeProjectionMatrixFOV(fov=cam.fov, aspect=w / h, nearVal=0.05, farVal=6.0)))
     conn.send(("ready", "egl" if renderer == pybullet.ER_BULLET_HARDWARE_OPENGL else "tiny"))
@@ -91,9 +100,10 @@ class CameraRig:
 
     def __init__(self, world, size: tuple[int, int], rate: float, speed: float = 1.0,
                  views: Optional[Iterable[str]] = None) -> None:
-        """`views`: the viewpoints the cell's streams use (None: all of VIEWS); others are never rendered."""
-        self.views = set(VIEWS if views is None else views)
-        unknown = self.views - set(VIEWS)
+        """`views`: the viewpoints the cell's streams use (None: all of them); others are never rendered."""
+        known = viewpoints(getattr(world, "spec", None))
+        self.views = set(known if views is None else views)
+        unknown = self.views - set(known)
         if unknown:
             raise ValueError(f"unknown camera views: {sorted(unknown)}")
         self.world = world
@@ -101,7 +111,7 @@ class CameraRig:
         self.period = 1.0 / rate
         ctx = mp.get_context("spawn")  # fork would copy the physics client and running threads
         self.conn, child = ctx.Pipe()
-        self.proc = ctx.Process(target=_render_main, args=(child, world.seed, world.urdf_path, size),
+        self.proc = ctx.Process(target=_render_main, args=(child, world.seed, world.urdf_dir, size, world.spec),
                                 name="sim-cameras", daemon=True)
         self.proc.start()
         self._stop = threading.Event()

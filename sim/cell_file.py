@@ -3,26 +3,33 @@
 The cell file (config/demo-cell.yaml by default) declares the topics the UI reads; the sim publishes its
 simulated devices there instead of on names of its own, so a cell file with other topic names works unchanged:
 
-- every `sensors:` entry of type geometry_msgs/WrenchStamped gets the wrist force/torque reading,
-- every `sensors:` entry of type cell_msgs/Scatter gets the tactile pad,
+- every `sensors:` entry of type geometry_msgs/WrenchStamped gets the wrist force/torque reading (of the arm its
+  `group` names; default the first arm),
+- every `sensors:` entry of type cell_msgs/Scatter gets the tactile pad (of the first arm with a gripper),
 - every `video.streams:` entry gets one camera on its `topic`, showing the viewpoint its `view` names
-  (sim/cameras.py VIEWS); a stream without `view` gets viewpoint number i mod len(VIEWS), i = its position.
+  (sim/cameras.py VIEWS, then the `simulation.views` of the cell); a stream without `view` gets viewpoint number
+  i mod (number of viewpoints), i = its position.
 
+The optional `simulation:` section describes the world (arms with their base and tool, parts, stations, extra
+camera viewpoints: parse_simulation below, docs/sim.md); without it the sim builds the demo world (sim/scene.py).
 Other sensor types are not the sim's (nothing is published for them); a missing section means no such devices.
 A file that cannot be read, or a section the sim cannot use, raises CellFileError with a readable message.
 The BFF validates the whole file against the JSON Schema; this module only checks what the sim relies on.
 """
 from __future__ import annotations
 
+import math
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Optional, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 import yaml  # PyYAML: Debian's ROS packages bring it (python3-yaml)
 
 from .cameras import VIEWS
+from .scene import (DOOR_INPUT, ArmSpec, GripperSpec, PartsSpec, StationSpec, VacuumSpec, ViewSpec, WorldSpec,
+                    default_world)
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 WRENCH_TYPE = "geometry_msgs/WrenchStamped"
@@ -52,12 +59,26 @@ class CellDevices:
     wrench_topics: tuple[str, ...] = ()
     tactile_topics: tuple[str, ...] = ()
     streams: tuple[Stream, ...] = ()
+    # The world the sim builds (the cell file's `simulation:` section; without it the demo world).
+    world: WorldSpec = field(default_factory=default_world)
+    # The arm (group) whose wrist F/T each wrench topic carries, parallel to wrench_topics.
+    wrench_groups: tuple[str, ...] = ()
+
+    @property
+    def all_views(self) -> list[str]:
+        """Every viewpoint of this cell: the built-in ones (VIEWS order), then the cell's own."""
+        return list(VIEWS) + [v.name for v in self.world.views]
 
     @property
     def views(self) -> list[str]:
-        """The viewpoints some stream shows, in VIEWS order (only these are ever rendered)."""
+        """The viewpoints some stream shows, in all_views order (only these are ever rendered)."""
         used = {s.view for s in self.streams}
-        return [v for v in VIEWS if v in used]
+        return [v for v in self.all_views if v in used]
+
+    @property
+    def tactile_group(self) -> Optional[str]:
+        """The arm whose finger pad the tactile topics carry: the first arm with a gripper."""
+        return next((a.group for a in self.world.arms if isinstance(a.tool, GripperSpec)), None)
 
 
 def default_cell_path() -> str:
@@ -67,6 +88,11 @@ def default_cell_path() -> str:
 
 def load_devices(path: Optional[str] = None) -> CellDevices:
     path = path or default_cell_path()
+    return devices_from(read_cell_file(path), path)
+
+
+def read_cell_file(path: str) -> Any:
+    """The parsed YAML document (CellFileError when it cannot be read)."""
     try:
         with open(path, encoding="utf-8") as f:
             doc = yaml.safe_load(f)
@@ -75,16 +101,21 @@ def load_devices(path: Optional[str] = None) -> CellDevices:
         raise CellFileError(f"cannot read cell file {path}: not valid YAML: {' '.join(str(e).split())}") from None
     except (OSError, ValueError) as e:  # ValueError: bad UTF-8, or a value such as an impossible date
         raise CellFileError(f"cannot read cell file {path}: {e}") from None
-    return devices_from(doc, path)
+    return doc
 
 
-def devices_from(doc: Any, path: str = "<cell file>", views: Sequence[str] = tuple(VIEWS)) -> CellDevices:
-    """The sim's devices declared in a parsed cell file."""
+def devices_from(doc: Any, path: str = "<cell file>", views: Optional[Sequence[str]] = None) -> CellDevices:
+    """The sim's devices (and its world) declared in a parsed cell file."""
     if not isinstance(doc, dict):
         raise CellFileError(f"cannot read cell file {path}: not a cell file (expected a mapping at the top level)")
 
     def bad(where: str, what: str) -> CellFileError:
         return CellFileError(f"cell file {path}: {where}: {what}")
+
+    world = parse_simulation(doc, path)
+    if views is None:
+        views = tuple(VIEWS) + tuple(v.name for v in world.views)
+    arm_groups = [a.group for a in world.arms]
 
     def topic_of(entry: dict, where: str) -> str:
         topic = entry.get("topic")
@@ -96,6 +127,8 @@ def devices_from(doc: Any, path: str = "<cell file>", views: Sequence[str] = tup
     if not isinstance(sensors, list):
         raise bad("sensors", "expected a list")
     by_type: dict[str, list[str]] = {WRENCH_TYPE: [], TACTILE_TYPE: []}
+    wrench_groups: list[str] = []
+    has_gripper = any(isinstance(a.tool, GripperSpec) for a in world.arms)
     for i, entry in enumerate(sensors):
         if not isinstance(entry, dict):
             raise bad(f"sensors[{i}]", "expected a mapping")
@@ -104,8 +137,21 @@ def devices_from(doc: Any, path: str = "<cell file>", views: Sequence[str] = tup
         if topics is None:
             continue  # a sensor the sim does not simulate
         topic = topic_of(entry, f"sensors[{i}]")
-        if topic not in topics:  # two UI panels may show one topic: publish it once
-            topics.append(topic)
+        group = arm_groups[0]
+        if mtype == WRENCH_TYPE and "group" in entry:
+            group = entry["group"]
+            if group not in arm_groups:
+                raise bad(f"sensors[{i}].group", f"no simulated arm {group!r} (the sim's arms: {', '.join(arm_groups)})")
+        if mtype == TACTILE_TYPE and not has_gripper:
+            raise bad(f"sensors[{i}]", "a tactile pad needs an arm with a gripper (simulation.arms)")
+        if topic in topics:  # two UI panels may show one topic: publish it once
+            if mtype == WRENCH_TYPE and wrench_groups[topics.index(topic)] != group:
+                raise bad(f"sensors[{i}].group", f"{topic} already carries the wrist F/T of arm "
+                                                 f"{wrench_groups[topics.index(topic)]!r}")
+            continue
+        topics.append(topic)
+        if mtype == WRENCH_TYPE:
+            wrench_groups.append(group)
 
     video = doc.get("video") or {}
     if not isinstance(video, dict):
@@ -128,7 +174,8 @@ def devices_from(doc: Any, path: str = "<cell file>", views: Sequence[str] = tup
         streams.append(Stream(name=name if isinstance(name, str) else topic, topic=topic, view=view))
 
     devices = CellDevices(path=path, wrench_topics=tuple(by_type[WRENCH_TYPE]),
-                          tactile_topics=tuple(by_type[TACTILE_TYPE]), streams=tuple(streams))
+                          tactile_topics=tuple(by_type[TACTILE_TYPE]), streams=tuple(streams), world=world,
+                          wrench_groups=tuple(wrench_groups))
     # One topic, one type: rospy refuses a second publisher of another type on a topic.
     seen: dict[str, str] = {t: "the sim itself" for t in RESERVED_TOPICS}
     for kind, topics in (("wrench sensor", devices.wrench_topics), ("tactile sensor", devices.tactile_topics),
@@ -138,3 +185,223 @@ def devices_from(doc: Any, path: str = "<cell file>", views: Sequence[str] = tup
                 raise bad(kind, f"{topic} is already used by {seen[topic]}")
             seen[topic] = f"a {kind}"
     return devices
+
+
+# ---------------------------------------------------------------------------------------------- simulation section
+SIM_KEYS = ("arms", "parts", "stations", "views")
+ARM_KEYS = ("group", "base", "tool", "start_joints")
+GRIPPER_KEYS = ("kind", "close_output", "closed_input", "part_input")
+VACUUM_KEYS = ("kind", "suction_output", "vacuum_input")
+PARTS_KEYS = ("size", "mass", "positions", "count", "start", "step", "jitter")
+STAND_KEYS = ("name", "kind", "position", "yaw_deg", "size", "height")
+FIXTURE_KEYS = ("name", "kind", "position", "yaw_deg", "pockets")
+VIEW_KEYS = ("eye", "target", "fov")
+DIGITAL_OUTPUTS = range(0, 8)                      # standard digital outputs 0-7
+TOOL_INPUTS = range(DOOR_INPUT + 1, 8)              # standard digital inputs 1-7 (DI0: the door)
+MIN_BASE_DISTANCE = 0.2                             # m between two arms' bases (their base cylinders are 0.15 m wide)
+_ID = re.compile(r"[a-z][a-z0-9_-]*")
+
+
+def parse_simulation(doc: dict, path: str = "<cell file>") -> WorldSpec:
+    """The cell file's `simulation:` section as a WorldSpec; absent: the demo world, its arm standing for the cell's
+    first motion group. Errors (CellFileError) name the field, e.g. `simulation.arms[1].tool.kind: ...`."""
+    manual = doc.get("manual")
+    groups = [g.get("name") for g in (manual.get("groups") or []) if isinstance(g, dict)] \
+        if isinstance(manual, dict) and isinstance(manual.get("groups"), list) else []
+    groups = [g for g in groups if isinstance(g, str)]
+    first = groups[0] if groups else "arm"
+    section = doc.get("simulation")
+    if section is None:
+        return default_world(first)
+
+    def bad(where: str, what: str) -> CellFileError:
+        return CellFileError(f"cell file {path}: {where}: {what}")
+
+    def mapping(value: Any, where: str, keys: Sequence[str]) -> dict:
+        if not isinstance(value, dict):
+            raise bad(where, f"expected a mapping, got {value!r}")
+        for k in value:
+            if k not in keys:
+                raise bad(f"{where}.{k}", f"unknown field (expected one of: {', '.join(keys)})")
+        return value
+
+    def number(value: Any, where: str, lo: float = -math.inf, hi: float = math.inf, lo_open: bool = False) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise bad(where, f"expected a number, got {value!r}")
+        if value < lo or value > hi or (lo_open and value == lo):
+            rng = f"{'>' if lo_open else '>='} {lo:g}" if hi == math.inf else f"from {lo:g} to {hi:g}"
+            raise bad(where, f"expected a number {rng}, got {value!r}")
+        return float(value)
+
+    def numbers(value: Any, where: str, sizes: Sequence[int], what: str,
+                check: Optional[Callable[[float, str], float]] = None) -> tuple[float, ...]:
+        if not isinstance(value, list) or len(value) not in sizes:
+            raise bad(where, f"expected {what}, got {value!r}")
+        return tuple((check or number)(v, f"{where}[{k}]") for k, v in enumerate(value))
+
+    def integer(value: Any, where: str, allowed: range) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or value not in allowed:
+            raise bad(where, f"expected an integer from {allowed.start} to {allowed.stop - 1}, got {value!r}")
+        return value
+
+    mapping(section, "simulation", SIM_KEYS)
+
+    # arms
+    arms: list[ArmSpec] = []
+    if "arms" in section:
+        entries = section["arms"]
+        if not isinstance(entries, list) or not entries:
+            raise bad("simulation.arms", f"expected a list of at least one arm, got {entries!r}")
+        for i, entry in enumerate(entries):
+            where = f"simulation.arms[{i}]"
+            mapping(entry, where, ARM_KEYS)
+            group = entry.get("group")
+            if not isinstance(group, str) or not group:
+                raise bad(f"{where}.group", f"expected the name of a motion group, got {group!r}")
+            if groups and group not in groups:
+                raise bad(f"{where}.group", f"{group!r} is not a motion group of manual.groups ({', '.join(groups)})")
+            if any(a.group == group for a in arms):
+                raise bad(f"{where}.group", f"{group!r} is already another arm's group")
+            base = numbers(entry.get("base", [0, 0, 0, 0]), f"{where}.base", (4,), "[x, y, z, yaw_deg]")
+            for k, other in enumerate(arms):
+                gap = math.dist(base[:2], other.base[:2])
+                if gap < MIN_BASE_DISTANCE:
+                    raise bad(f"{where}.base", f"{gap:.2f} m from the base of arms[{k}] (at least "
+                                               f"{MIN_BASE_DISTANCE} m apart)")
+            start = None
+            if "start_joints" in entry:
+                start = numbers(entry["start_joints"], f"{where}.start_joints", (6,), "6 joint positions (rad)",
+                                lambda v, w: number(v, w, -2 * math.pi, 2 * math.pi))
+            arms.append(ArmSpec(group=group, base=base[:3], yaw=math.radians(base[3]) if base[3] else 0.0,
+                                tool=_tool(entry.get("tool", {"kind": "gripper"}), f"{where}.tool", mapping, integer,
+                                           bad), start_joints=start))
+    else:
+        arms = list(default_world(first).arms)
+
+    # parts
+    parts = PartsSpec()
+    if "parts" in section:
+        where = "simulation.parts"
+        entry = mapping(section["parts"], where, PARTS_KEYS)
+        kw: dict[str, Any] = {}
+        if "size" in entry:
+            kw["size"] = number(entry["size"], f"{where}.size", 0.01, 0.1)
+        if "mass" in entry:
+            kw["mass"] = number(entry["mass"], f"{where}.mass", 0.0, 5.0, lo_open=True)
+        if "positions" in entry:
+            for k in ("count", "start", "step"):
+                if k in entry:
+                    raise bad(f"{where}.{k}", "give either positions or count/start/step, not both")
+            pos = entry["positions"]
+            if not isinstance(pos, list):
+                raise bad(f"{where}.positions", f"expected a list of [x, y] or [x, y, yaw_deg], got {pos!r}")
+            items = [numbers(v, f"{where}.positions[{k}]", (2, 3), "[x, y] or [x, y, yaw_deg]")
+                     for k, v in enumerate(pos)]
+            kw["positions"] = tuple((v[0], v[1], math.radians(v[2]) if len(v) == 3 else 0.0) for v in items)
+            kw["jitter"] = (0.0, 0.0, 0.0)
+        else:
+            if "count" in entry:
+                kw["count"] = integer(entry["count"], f"{where}.count", range(0, 21))
+            if "start" in entry:
+                kw["start"] = numbers(entry["start"], f"{where}.start", (2,), "[x, y]")
+            if "step" in entry:
+                kw["step"] = numbers(entry["step"], f"{where}.step", (2,), "[dx, dy]")
+        if "jitter" in entry:
+            j = numbers(entry["jitter"], f"{where}.jitter", (3,), "[x, y, yaw_deg]",
+                        lambda v, w: number(v, w, 0.0))
+            kw["jitter"] = (j[0], j[1], math.radians(j[2]))
+        parts = PartsSpec(**kw)
+
+    # stations
+    stations: tuple[StationSpec, ...] = (StationSpec(),)
+    if "stations" in section:
+        entries = section["stations"]
+        if not isinstance(entries, list):
+            raise bad("simulation.stations", f"expected a list, got {entries!r}")
+        out: list[StationSpec] = []
+        for i, entry in enumerate(entries):
+            where = f"simulation.stations[{i}]"
+            kind = entry.get("kind") if isinstance(entry, dict) else None
+            if kind not in ("stand", "fixture"):
+                raise bad(f"{where}.kind", f"expected stand or fixture, got {kind!r}")
+            mapping(entry, where, STAND_KEYS if kind == "stand" else FIXTURE_KEYS)
+            name = entry.get("name")
+            if not isinstance(name, str) or not _ID.fullmatch(name):
+                raise bad(f"{where}.name", f"expected a name like hand_over (a-z, 0-9, _ or -), got {name!r}")
+            if any(s.name == name for s in out):
+                raise bad(f"{where}.name", f"{name!r} is already another station's name")
+            kw = {"name": name, "kind": kind}
+            if "yaw_deg" in entry:
+                yaw = number(entry["yaw_deg"], f"{where}.yaw_deg", -360, 360)
+                kw["yaw"] = math.radians(yaw) if yaw else 0.0
+            pockets = entry.get("pockets", 3)
+            if kind == "fixture" and isinstance(pockets, list):
+                if "position" in entry:
+                    raise bad(f"{where}.position", "a fixture with a list of pockets has them at world positions: "
+                                                   "no position")
+                if not pockets:
+                    raise bad(f"{where}.pockets", "expected at least one pocket")
+                kw["pockets"] = tuple(numbers(v, f"{where}.pockets[{k}]", (2,), "[x, y]")
+                                      for k, v in enumerate(pockets))
+                pitch = parts.size + 0.008 + 0.02
+                for a in range(len(kw["pockets"])):
+                    for b in range(a):
+                        if math.dist(kw["pockets"][a], kw["pockets"][b]) < pitch - 1e-9:
+                            raise bad(f"{where}.pockets[{a}]", f"overlaps pockets[{b}] (pocket centres at least "
+                                                                f"{pitch:.3f} m apart for these parts)")
+            else:
+                if "position" not in entry:
+                    raise bad(f"{where}.position", "required: [x, y]")
+                kw["position"] = numbers(entry["position"], f"{where}.position", (2,), "[x, y]")
+                if kind == "fixture":
+                    kw["pockets"] = integer(pockets, f"{where}.pockets", range(1, 11)) if not isinstance(
+                        pockets, list) else pockets
+                else:
+                    kw["size"] = numbers(entry.get("size", [0.1, 0.1]), f"{where}.size", (2,), "[x, y] (m)",
+                                         lambda v, w: number(v, w, 0.02, 1.0))
+                    kw["height"] = number(entry.get("height", 0.1), f"{where}.height", 0.01, 0.5)
+            out.append(StationSpec(**kw))
+        stations = tuple(out)
+
+    # views
+    views: list[ViewSpec] = []
+    if "views" in section:
+        entries = section["views"]
+        if not isinstance(entries, dict):
+            raise bad("simulation.views", f"expected a mapping of viewpoint names to {{eye, target, fov}}, "
+                                          f"got {entries!r}")
+        for name, entry in entries.items():
+            where = f"simulation.views.{name}"
+            if not isinstance(name, str) or not _ID.fullmatch(name):
+                raise bad(where, "expected a viewpoint name like hand_over (a-z, 0-9, _ or -)")
+            if name in VIEWS:
+                raise bad(where, f"{name!r} is a built-in viewpoint (the sim has: {', '.join(VIEWS)})")
+            mapping(entry, where, VIEW_KEYS)
+            for k in ("eye", "target"):
+                if k not in entry:
+                    raise bad(f"{where}.{k}", "required: [x, y, z]")
+            eye = numbers(entry["eye"], f"{where}.eye", (3,), "[x, y, z]")
+            target = numbers(entry["target"], f"{where}.target", (3,), "[x, y, z]")
+            if math.dist(eye, target) < 0.05:
+                raise bad(f"{where}.target", "too close to the eye")
+            fov = number(entry.get("fov", 60), f"{where}.fov", 10, 120)
+            views.append(ViewSpec(name, eye, target, fov))  # type: ignore[arg-type]
+    return WorldSpec(arms=tuple(arms), parts=parts, stations=stations, views=tuple(views))
+
+
+def _tool(value: Any, where: str, mapping, integer, bad):
+    kind = value.get("kind") if isinstance(value, dict) else None
+    if kind not in ("gripper", "vacuum"):
+        raise bad(f"{where}.kind", f"expected gripper or vacuum, got {kind!r}")
+    if kind == "gripper":
+        mapping(value, where, GRIPPER_KEYS)
+        spec: Any = GripperSpec(close_output=integer(value.get("close_output", 0), f"{where}.close_output",
+                                                     DIGITAL_OUTPUTS),
+                                closed_input=integer(value.get("closed_input", 1), f"{where}.closed_input", TOOL_INPUTS),
+                                part_input=integer(value.get("part_input", 2), f"{where}.part_input", TOOL_INPUTS))
+        if spec.closed_input == spec.part_input:
+            raise bad(f"{where}.part_input", f"DI{spec.part_input} is already the closed_input")
+        return spec
+    mapping(value, where, VACUUM_KEYS)
+    return VacuumSpec(suction_output=integer(value.get("suction_output", 0), f"{where}.suction_output", DIGITAL_OUTPUTS),
+                      vacuum_input=integer(value.get("vacuum_input", 1), f"{where}.vacuum_input", TOOL_INPUTS))

@@ -1,7 +1,10 @@
 """The emulated UR controller: robot/safety/program state, IO, registers, and the 500 Hz control loop.
 
 Everything a UR reports over RTDE or the dashboard server lives here; the servers only translate.
-Commands from other threads (RTDE inputs, dashboard, faults) take `lock`; the control loop takes it per tick.
+One Controller per arm of the world (each on its own address, with its own safety, IO and registers); the
+WorldLoop ticks them all and steps the one physics world once per tick between their halves.
+Commands from other threads (RTDE inputs, dashboard, faults) take `lock` (one lock for the whole world: the physics
+client is shared); the control loop takes it per tick.
 """
 from __future__ import annotations
 
@@ -16,9 +19,10 @@ import numpy as np
 
 from . import kinematics as kin
 from . import motion
-from .safety import FaultBook
-from .urdf import DEFAULT_TCP
-from .world import DT, ArmState, World
+from .safety import FaultBook, cell_faults
+from .scene import DOOR_INPUT, GripperSpec
+from .urdf import default_tcp
+from .world import DT, ArmState, RobotArm, World
 
 log = logging.getLogger("sim.controller")
 
@@ -31,7 +35,7 @@ POWER_UP_TIME = 0.5                           # s of sim time from "power on" to
 PROTECTIVE_STOP_DECEL = 8.0                   # rad/s^2 (category 2 stop)
 FORCE_LIMIT = 150.0                           # N at the wrist before the cell's force guard trips
 FORCE_LIMIT_TICKS = 25                        # ... sustained for 50 ms
-GRIPPER_DO = 0                                # standard digital output that closes the gripper
+GRIPPER_DO = 0                                # the demo's gripper closes on standard digital output 0
 INTEGRAL_GAIN = 0.05                          # why: removes the steady sag of position control under gravity
 
 
@@ -90,9 +94,9 @@ class Snapshot:
 class Arm:
     """Holds the joint setpoint, runs the active motion generator and drives the physics toward it."""
 
-    def __init__(self, world: World) -> None:
-        self.world = world
-        q = world.arm_state().q
+    def __init__(self, body: RobotArm) -> None:
+        self.body = body
+        q = body.arm_state().q
         self.q_set = q.copy()
         self.qd_set = np.zeros(6)
         self.qdd_set = np.zeros(6)
@@ -121,7 +125,7 @@ class Arm:
             self.motion = None
             self.qd_set = np.zeros(6)
             self.bias += INTEGRAL_GAIN * (self.q_set - q_actual)
-            self.world.hold(self.q_set + self.bias)
+            self.body.hold(self.q_set + self.bias)
             return
         prev_qd = self.qd_set
         if self.motion is not None:
@@ -135,7 +139,7 @@ class Arm:
         self.qdd_set = (self.qd_set - prev_qd) / DT
         if not self.frozen:
             self.bias += INTEGRAL_GAIN * (self.q_set - q_actual)
-        self.world.command_arm(self.q_set + self.bias, self.qd_set)
+        self.body.command_arm(self.q_set + self.bias, self.qd_set)
 
     def settled(self, q_actual: np.ndarray, qd_actual: np.ndarray) -> bool:
         return (self.motion is None and float(np.max(np.abs(self.q_set - q_actual))) < 2e-5
@@ -143,14 +147,22 @@ class Arm:
 
 
 class Controller:
-    def __init__(self, world: World, boot_powered: bool = True) -> None:
+    def __init__(self, world: World, boot_powered: bool = True, body: Optional[RobotArm] = None,
+                 lock: Optional[threading.RLock] = None, faults: Optional[FaultBook] = None,
+                 fault_ids: Optional[dict[str, str]] = None) -> None:
         self.world = world
-        self.lock = threading.RLock()
-        self.faults = FaultBook()
+        self.body = body if body is not None else world.arms[0]
+        self.tool = self.body.spec.tool
+        self.lock = lock if lock is not None else threading.RLock()
+        # This arm's faults in the cell's FaultBook: generic name (protective_stop, tool_fault, door_open, force_limit)
+        # -> fault id (one arm: the plain names, gripper_fault/vacuum_fault; several: "<group>.<name>", see safety.py).
+        table, ids = cell_faults([(self.body.group, self.tool.kind)])
+        self.faults = faults if faults is not None else FaultBook(table)
+        self.fault_ids = fault_ids or ids[0]
         self.sim_time = 0.0
-        self.tcp = np.array(DEFAULT_TCP)
+        self.tcp = np.array(default_tcp(self.tool.kind))
         self.payload = 0.0
-        self.arm = Arm(world)
+        self.arm = Arm(self.body)
         self.robot_mode = RobotMode.RUNNING if boot_powered else RobotMode.POWER_OFF
         self.safety_mode = SafetyMode.NORMAL
         self.runtime_state = RuntimeState.STOPPED
@@ -175,65 +187,54 @@ class Controller:
         self.external_ft = [0.0] * 6
         self.ft_zero = np.zeros(6)
         self._over_force_ticks = 0
-        self._q_before_overload = self.world.arm_state().q
+        self._q_before_overload = self.body.arm_state().q
         self._q_history: deque[np.ndarray] = deque(maxlen=50)
-        self._stop_event = threading.Event()
-        self._thread: Optional[threading.Thread] = None
         self.tick_listeners: list[Callable[[Snapshot], None]] = []
         self.snapshot = self._make_snapshot()
         self.ticks = 0
 
     # ---- running ------------------------------------------------------------------------------
-    def start(self, speed: float = 1.0) -> None:
-        self._thread = threading.Thread(target=self._run, args=(speed,), name="controller", daemon=True)
-        self._thread.start()
-
-    def stop(self) -> None:
-        self._stop_event.set()
-        if self._thread is not None:
-            self._thread.join(2.0)
-
-    def _run(self, speed: float) -> None:
-        """Tick at DT of sim time per DT/speed of wall time; if we fall behind we resync instead of bursting."""
-        period = DT / speed
-        next_t = time.perf_counter()
-        while not self._stop_event.is_set():
-            try:
-                self.tick()
-            except Exception:  # never let one bad tick kill the controller
-                log.exception("controller tick failed")
-            next_t += period
-            delay = next_t - time.perf_counter()
-            if delay > 0:
-                time.sleep(delay)
-            elif delay < -0.05:
-                next_t = time.perf_counter()
-
     def tick(self) -> None:
+        """One controller tick with the physics step (a world with this one arm; else WorldLoop.tick)."""
         with self.lock:
-            self.sim_time += DT
-            self.ticks += 1
-            self._advance_mode()
-            self._start_pending_program()
-            q_now = self.snapshot.actual_q  # state after the previous step == state now (saves a query)
-            if self.runtime_state == RuntimeState.PLAYING and self.program is not None:
-                try:
-                    self.program.tick(self)
-                except motion.MotionError as e:
-                    self.runtime_error(str(e))
-            self.world.set_gripper(bool(self.std_do & (1 << GRIPPER_DO)))
-            powered = self.robot_mode == RobotMode.RUNNING
-            try:
-                self.arm.tick(q_now, powered, self.speed_slider)
-            except motion.MotionError as e:
-                self.arm.motion = None
-                self.arm.qd_set = np.zeros(6)
-                self.runtime_error(str(e))
+            self.step_controls()
             self.world.step()
-            self.snapshot = self._make_snapshot(self.world.arm_state())
-            self._check_force_limit()
+            self.after_step()
+        self.notify()
+
+    def step_controls(self) -> None:
+        """First half of a tick (lock held): program, tool IO and this arm's joint commands for the next step."""
+        self.sim_time += DT
+        self.ticks += 1
+        self._advance_mode()
+        self._start_pending_program()
+        q_now = self.snapshot.actual_q  # state after the previous step == state now (saves a query)
+        if self.runtime_state == RuntimeState.PLAYING and self.program is not None:
+            try:
+                self.program.tick(self)
+            except motion.MotionError as e:
+                self.runtime_error(str(e))
+        self.body.set_tool(bool(self.std_do & (1 << self._tool_output())))
+        self.body.tick_tool()
+        powered = self.robot_mode == RobotMode.RUNNING
+        try:
+            self.arm.tick(q_now, powered, self.speed_slider)
+        except motion.MotionError as e:
+            self.arm.motion = None
+            self.arm.qd_set = np.zeros(6)
+            self.runtime_error(str(e))
+
+    def after_step(self) -> None:
+        """Second half of a tick (lock held), after the physics step: the new state, the force guard."""
+        self.snapshot = self._make_snapshot(self.body.arm_state())
+        self._check_force_limit()
+
+    def notify(self) -> None:
         for fn in self.tick_listeners:
             fn(self.snapshot)
+
+    def _tool_output(self) -> int:
+        return self.tool.close_output if isinstance(self.tool, GripperSpec) else self.tool.suction_output
 
     def _advance_mode(self) -> None:
         if self._mode_change_at and self.sim_time >= self._mode_change_at[0]:
@@ -242,7 +243,7 @@ class Controller:
 
     def _make_snapshot(self, st: Optional[ArmState] = None) -> Snapshot:
         s = Snapshot()
-        st = st or self.world.arm_state()
+        st = st or self.body.arm_state()
         s.timestamp = self.sim_time
         s.actual_q, s.actual_qd = st.q, st.qd
         s.actual_current = st.torque / 10.0  # nominal torque constant ~10 N m / A
@@ -250,16 +251,16 @@ class Controller:
         # Why pybullet's FK and not sim.kinematics here: it is C++ and this runs 500 times a second; the URDF
         # matches the DH model to 1e-6 m (tests/test_kinematics.py).
         tcp_quat = self._tcp_quat()
-        _, flange_orn, tpos, torn, v_tcp, w = self.world.tcp_state(self.tcp[:3], tcp_quat)
+        _, flange_orn, tpos, torn, v_tcp, w = self.body.tcp_state(self.tcp[:3], tcp_quat)
         s.actual_TCP_pose = np.array([*tpos, *kin.quat_to_rotvec(torn)])
         s.actual_TCP_speed = np.array([*v_tcp, *w])
-        s.elbow_position = np.array(self.world.elbow_position())
+        s.elbow_position = np.array(self.body.elbow_position())
         if self.arm.motion is None and not self.arm.qd_set.any():
             s.target_TCP_pose = self._target_pose_cache(s.target_q)
         else:
             s.target_TCP_pose = kin.forward(s.target_q, self.tcp)
         s.target_TCP_speed = s.actual_TCP_speed  # why: a second Jacobian per tick costs more than it tells
-        raw = self.world.ft_wrench() - self.ft_zero
+        raw = self.body.ft_wrench() - self.ft_zero
         s.ft_raw = raw
         rot = np.array(self.world.p.getMatrixFromQuaternion(flange_orn)).reshape(3, 3)
         s.actual_TCP_force = np.concatenate([rot @ raw[:3], rot @ raw[3:]])  # sensor frame -> base frame
@@ -270,7 +271,7 @@ class Controller:
         powered = self.robot_mode in (RobotMode.POWER_ON, RobotMode.IDLE, RobotMode.RUNNING)
         s.robot_status_bits = (1 if powered else 0) | (2 if self.runtime_state == RuntimeState.PLAYING else 0)
         s.safety_status_bits = self._safety_bits()
-        s.finger_q = self.world.finger_positions()
+        s.finger_q = self.body.finger_positions()
         s.digital_in = self._digital_inputs(s.finger_q)
         s.digital_out = self.std_do | (self.conf_do << 8) | (self.tool_do << 16)
         s.speed_scaling = 0.0 if self.safety_mode != SafetyMode.NORMAL else self.speed_slider
@@ -319,10 +320,14 @@ class Controller:
         return bits
 
     def _digital_inputs(self, fingers: list[float]) -> int:
-        """DI0: door closed (safeguard circuit), DI1: gripper closed, DI2: part detected between the fingers."""
-        closed = self.world.gripper_closed
-        part = closed and min(fingers) > 0.003
-        return (0 if self.door_open else 1) | ((1 if closed else 0) << 1) | ((1 if part else 0) << 2)
+        """DI0: door closed (safeguard circuit); the tool's inputs (the demo's gripper: DI1 closed, DI2 part detected
+        between the fingers; a vacuum tool: its input reads a part held on the cup)."""
+        bits = 0 if self.door_open else 1 << DOOR_INPUT
+        if isinstance(self.tool, GripperSpec):
+            closed = self.body.gripper_closed
+            part = closed and min(fingers) > 0.003
+            return bits | ((1 if closed else 0) << self.tool.closed_input) | ((1 if part else 0) << self.tool.part_input)
+        return bits | ((1 if self.body.held is not None else 0) << self.tool.vacuum_input)
 
     # ---- IO and registers (RTDE inputs) -------------------------------------------------------
     def apply_inputs(self, values: dict[str, object]) -> None:
@@ -445,7 +450,7 @@ class Controller:
         """Category-2 stop: decelerate, hold, stop the program; needs an unlock (>= 5 s later)."""
         with self.lock:
             if self.safety_mode != SafetyMode.PROTECTIVE_STOP:
-                log.warning("protective stop (%s)", cause)
+                log.warning("protective stop (%s) of the arm of group %s", cause, self.body.group)
                 self.safety_mode = SafetyMode.PROTECTIVE_STOP
                 self.protective_stop_at = self.sim_time
                 if cause == "force_limit":
@@ -454,9 +459,9 @@ class Controller:
                 else:
                     self.arm.stop(PROTECTIVE_STOP_DECEL)
                 self.stop_program("stopped by protective stop")
-        self.faults.set("protective_stop", True)
+        self.faults.set(self.fault_ids["protective_stop"], True)
         if cause == "force_limit":
-            self.faults.set("force_limit", True)
+            self.faults.set(self.fault_ids["force_limit"], True)
 
     def unlock_protective_stop(self, force: bool = False) -> bool:
         with self.lock:
@@ -465,8 +470,8 @@ class Controller:
             if not force and self.sim_time - self.protective_stop_at < PROTECTIVE_STOP_UNLOCK_DELAY:
                 return False
             self.safety_mode = SafetyMode.SAFEGUARD_STOP if self.door_open else SafetyMode.NORMAL
-        self.faults.set("protective_stop", False)
-        self.faults.set("force_limit", False)
+        self.faults.set(self.fault_ids["protective_stop"], False)
+        self.faults.set(self.fault_ids["force_limit"], False)
         return True
 
     def set_door_open(self, is_open: bool) -> None:
@@ -482,12 +487,18 @@ class Controller:
                 self.safety_mode = SafetyMode.NORMAL
                 if self.runtime_state == RuntimeState.PAUSED and self.program is not None:
                     self.runtime_state = RuntimeState.PLAYING
-        self.faults.set("door_open", is_open)
+        self.faults.set(self.fault_ids["door_open"], is_open)
 
     def set_gripper_fault(self, active: bool) -> None:
+        """A tool fault (gripper or vacuum): the tool ignores its output until reset."""
         with self.lock:
-            self.world.freeze_gripper(active)
-        self.faults.set("gripper_fault", active)
+            self.body.freeze_gripper(active)
+        self.faults.set(self.fault_ids["tool_fault"], active)
+
+    @property
+    def fault_names(self) -> tuple[str, ...]:
+        """What trigger_fault takes for this arm (the tool fault is named after the tool: gripper_fault, ...)."""
+        return ("protective_stop", f"{self.tool.kind}_fault", "door_open", "force_limit", "reset")
 
     def trigger_fault(self, fault: str) -> tuple[bool, str]:
         """The /sim/trigger_fault service: inject a fault, or 'reset' to clear them all."""
@@ -497,14 +508,14 @@ class Controller:
             self.protective_stop("force_limit")
         elif fault == "door_open":
             self.set_door_open(True)
-        elif fault == "gripper_fault":
+        elif fault == f"{self.tool.kind}_fault":
             self.set_gripper_fault(True)
         elif fault == "reset":
             self.set_door_open(False)
             self.set_gripper_fault(False)
             self.unlock_protective_stop(force=True)
         else:
-            return False, f"unknown fault '{fault}' (protective_stop, gripper_fault, door_open, force_limit, reset)"
+            return False, f"unknown fault '{fault}' ({', '.join(self.fault_names)})"
         return True, f"{fault} done"
 
     def _check_force_limit(self) -> None:
@@ -531,3 +542,56 @@ class Controller:
 
 def _masked(current: int, mask: int, value: int) -> int:
     return (current & ~mask) | (value & mask)
+
+
+class WorldLoop:
+    """Ticks every arm's controller and steps the one physics world once per tick, at DT of sim time per DT/speed
+    of wall time (falling behind: resync instead of bursting).
+
+    Per tick, under the world lock: each controller runs its program and commands its own arm (step_controls), the
+    physics steps once for the whole world, then each controller reads its arm's new state and checks its own force
+    guard (after_step). The tick listeners (RTDE streams wait on nothing: they read `snapshot`) run outside the lock.
+    """
+
+    def __init__(self, world: World, controllers: list[Controller], lock: threading.RLock) -> None:
+        self.world, self.controllers, self.lock = world, controllers, lock
+        self._stop_event = threading.Event()
+        self._thread: Optional[threading.Thread] = None
+
+    @property
+    def sim_time(self) -> float:
+        return self.controllers[0].sim_time
+
+    def tick(self) -> None:
+        with self.lock:
+            for c in self.controllers:
+                c.step_controls()
+            self.world.step()
+            for c in self.controllers:
+                c.after_step()
+        for c in self.controllers:
+            c.notify()
+
+    def start(self, speed: float = 1.0) -> None:
+        self._thread = threading.Thread(target=self._run, args=(speed,), name="controller", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop_event.set()
+        if self._thread is not None:
+            self._thread.join(2.0)
+
+    def _run(self, speed: float) -> None:
+        period = DT / speed
+        next_t = time.perf_counter()
+        while not self._stop_event.is_set():
+            try:
+                self.tick()
+            except Exception:  # never let one bad tick kill the controllers
+                log.exception("controller tick failed")
+            next_t += period
+            delay = next_t - time.perf_counter()
+            if delay > 0:
+                time.sleep(delay)
+            elif delay < -0.05:
+                next_t = time.perf_counter()

@@ -258,9 +258,9 @@ class ControlScriptProgram:
         elif cmd == SET_PAYLOAD:
             c.payload = self._in_f(c, 0)[0]
         elif cmd == ZERO_FT_SENSOR:
-            c.ft_zero = c.world.ft_wrench()
+            c.ft_zero = c.body.ft_wrench()
         elif cmd == GET_JOINT_TORQUES:
-            self._out_f(c, 0, c.world.arm_state().torque)
+            self._out_f(c, 0, c.body.arm_state().torque)
         elif cmd == GET_STEPTIME:
             self._out_f(c, 0, [0.002])
         elif cmd == GET_TARGET_WAYPOINT:

@@ -1,12 +1,13 @@
 """ROS 1 side of the simulated cell's devices: sensor topics, camera images, device faults, the fault service.
 
-The device topics are the ones the cell file declares (sim/cell_file.py): the wrist F/T reading on every
-WrenchStamped sensor topic and the tactile pad on every Scatter sensor topic (sensor rate), one
-sensor_msgs/CompressedImage camera per video stream (camera rate, only while the topic has a subscriber).
+The device topics are the ones the cell file declares (sim/cell_file.py): the wrist F/T reading of the arm a
+WrenchStamped sensor names (default the first) on its topic and the tactile pad on every Scatter sensor topic (sensor
+rate), one sensor_msgs/CompressedImage camera per video stream (camera rate, only while the topic has a subscriber).
 Fixed names: /sim/faults (latched cell_msgs/AlarmList: the devices' fault state, for the cell's alarms feature to
-turn into alarms; the sim publishes no alarm list itself), /sim/objects (geometry_msgs/PoseArray, frame `base`, the
-cubes in creation order at OBJECTS_RATE: ground truth for tests and the UI to see parts move; a real cell has no such
-topic) and the service /sim/trigger_fault (cell_msgs/TriggerFault).
+turn into alarms; the sim publishes no alarm list itself), /sim/objects (geometry_msgs/PoseArray, every part in
+creation order at OBJECTS_RATE, frame `base` when the only arm stands at the world origin, else `world`: ground truth
+for tests and the UI to see parts move; a real cell has no such topic) and the service /sim/trigger_fault
+(cell_msgs/TriggerFault).
 No /joint_states: the arm is a UR controller, which speaks RTDE, not ROS; the cell's robot driver
 (cell_nodes manual_node) reads it over RTDE and is the only source of /joint_states, as with a real robot.
 """
@@ -17,7 +18,6 @@ import threading
 from typing import Optional
 
 from .cell_file import CellDevices, Stream
-from .controller import Controller
 from .pacing import Pacer
 from .safety import Fault
 
@@ -36,8 +36,9 @@ def ros_master_online() -> bool:
 
 
 class RosBridge:
-    def __init__(self, controller: Controller, devices: CellDevices, sensor_rate: float, speed: float = 1.0,
+    def __init__(self, cell, devices: CellDevices, sensor_rate: float, speed: float = 1.0,
                  node_name: str = "sim_cell") -> None:
+        """`cell`: the sim.cell.Cell (its controllers by group, fault book, lock, world and trigger_fault)."""
         import rospy
         from cell_msgs.msg import AlarmList, Scatter
         from cell_msgs.srv import TriggerFault
@@ -45,7 +46,11 @@ class RosBridge:
         from sensor_msgs.msg import CompressedImage
 
         self.rospy = rospy
-        self.ctl = controller
+        self.cell = cell
+        self.lock = cell.lock
+        several = len(cell.controllers) > 1
+        # Frames name the arm when there are several (each has its own sensor).
+        self._frame = (lambda group, frame: f"{group}_{frame}") if several else (lambda group, frame: frame)
         self.period = 1.0 / sensor_rate
         # disable_signals: the CLI owns SIGINT/SIGTERM and shuts us down itself.
         root_handlers, root_level = list(logging.root.handlers), logging.root.level
@@ -58,15 +63,20 @@ class RosBridge:
             if h not in logging.root.handlers:
                 logging.root.addHandler(h)
         logging.root.setLevel(root_level)
-        self.pub_wrench = [rospy.Publisher(t, WrenchStamped, queue_size=10) for t in devices.wrench_topics]
+        # (group, publisher): each topic carries the wrist F/T of the arm its sensor entry names.
+        self.pub_wrench = [(g, rospy.Publisher(t, WrenchStamped, queue_size=10))
+                           for t, g in zip(devices.wrench_topics, devices.wrench_groups)]
         self.pub_tactile = [rospy.Publisher(t, Scatter, queue_size=10) for t in devices.tactile_topics]
+        self.tactile_group = devices.tactile_group
         # Latched: a node that starts later still learns which faults are active right now.
         self.pub_faults = rospy.Publisher("/sim/faults", AlarmList, queue_size=5, latch=True)
         self.pub_images: list[tuple[Stream, rospy.Publisher]] = [
             (s, rospy.Publisher(s.topic, CompressedImage, queue_size=2)) for s in devices.streams]
         for s in devices.streams:
             log.info("camera %r on %s shows the %s view", s.name, s.topic, s.view)
-        # The world frame is the robot's base frame (the arm stands at the origin): poses are in `base`.
+        # One arm at the origin: the world frame is its base frame (`base`, as before); several arms: `world`.
+        arms = cell.world.arms
+        self.objects_frame = "base" if len(arms) == 1 and arms[0].at_origin else "world"
         self.pub_objects = rospy.Publisher("/sim/objects", PoseArray, queue_size=2)
         self._types = dict(AlarmList=AlarmList, Scatter=Scatter, WrenchStamped=WrenchStamped,
                            CompressedImage=CompressedImage, Pose=Pose, PoseArray=PoseArray)
@@ -77,7 +87,7 @@ class RosBridge:
         self.published = 0
 
     def start(self) -> None:
-        self.ctl.faults.subscribe(self._publish_faults)
+        self.cell.faults.subscribe(self._publish_faults)
         self._thread = threading.Thread(target=self._sensor_loop, name="ros-sensors", daemon=True)
         self._thread.start()
         self._objects_thread = threading.Thread(target=self._objects_loop, name="ros-objects", daemon=True)
@@ -102,23 +112,24 @@ class RosBridge:
             pacer.wait()
 
     def _publish_sensors(self) -> None:
-        snap = self.ctl.snapshot
         stamp = self.rospy.Time.now()
-        if self.pub_wrench:
-            w = self._types["WrenchStamped"]()
-            w.header.stamp = stamp
-            w.header.frame_id = "ft_sensor"
-            f = snap.ft_raw
-            w.wrench.force.x, w.wrench.force.y, w.wrench.force.z = float(f[0]), float(f[1]), float(f[2])
-            w.wrench.torque.x, w.wrench.torque.y, w.wrench.torque.z = float(f[3]), float(f[4]), float(f[5])
-            for pub in self.pub_wrench:
-                pub.publish(w)
+        wrenches = {}
+        for group, pub in self.pub_wrench:
+            if group not in wrenches:
+                w = self._types["WrenchStamped"]()
+                w.header.stamp = stamp
+                w.header.frame_id = self._frame(group, "ft_sensor")
+                f = self.cell.controllers[group].snapshot.ft_raw
+                w.wrench.force.x, w.wrench.force.y, w.wrench.force.z = float(f[0]), float(f[1]), float(f[2])
+                w.wrench.torque.x, w.wrench.torque.y, w.wrench.torque.z = float(f[3]), float(f[4]), float(f[5])
+                wrenches[group] = w
+            pub.publish(wrenches[group])
         if self.pub_tactile:  # the contact query holds the physics lock: skip it when no cell topic wants it
-            with self.ctl.lock:  # contact queries touch the physics client
-                xs, forces = self.ctl.world.tactile()
+            with self.lock:  # contact queries touch the physics client
+                xs, forces = self.cell.controllers[self.tactile_group].body.tactile()
             t = self._types["Scatter"]()
             t.header.stamp = stamp
-            t.header.frame_id = "finger_left_pad"
+            t.header.frame_id = self._frame(self.tactile_group, "finger_left_pad")
             t.x, t.y = xs, forces
             for pub in self.pub_tactile:
                 pub.publish(t)
@@ -134,11 +145,11 @@ class RosBridge:
             pacer.wait()
 
     def _publish_objects(self) -> None:
-        with self.ctl.lock:  # the physics client is the controller loop's: read between two ticks
-            poses = self.ctl.world.body_poses()
+        with self.lock:  # the physics client is the controller loop's: read between two ticks
+            poses = self.cell.world.body_poses()
         out = self._types["PoseArray"]()
         out.header.stamp = self.rospy.Time.now()
-        out.header.frame_id = "base"
+        out.header.frame_id = self.objects_frame
         for (x, y, z), (qx, qy, qz, qw) in poses:
             m = self._types["Pose"]()
             m.position.x, m.position.y, m.position.z = float(x), float(y), float(z)
@@ -175,6 +186,6 @@ class RosBridge:
 
     def _trigger_fault(self, req):
         from cell_msgs.srv import TriggerFaultResponse
-        ok, message = self.ctl.trigger_fault(req.fault.strip())
+        ok, message = self.cell.trigger_fault(req.fault.strip())
         log.info("trigger_fault(%s): %s", req.fault, message)
         return TriggerFaultResponse(success=ok, message=message)

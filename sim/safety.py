@@ -8,7 +8,7 @@ from __future__ import annotations
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Mapping, Optional, Sequence
 
 FAULTS = {
     # id: (text, severity 0 info / 1 warning / 2 error)
@@ -17,6 +17,33 @@ FAULTS = {
     "door_open": ("Cell door open: safeguard stop until the door is closed", 2),
     "force_limit": ("Force limit exceeded at the wrist: protective stop", 2),
 }
+TOOL_FAULTS = {
+    "gripper": FAULTS["gripper_fault"],
+    "vacuum": ("Vacuum fault: the suction does not respond to commands", 2),
+}
+
+
+def cell_faults(arms: Sequence[tuple[str, str]]) -> tuple[dict[str, tuple[str, int]], list[dict[str, str]]]:
+    """The fault table of a cell with these arms ((group, tool kind) each), and per arm its generic fault name ->
+    fault id. One arm: the ids are the names (protective_stop, gripper_fault, door_open, force_limit: the demo's).
+    Several arms: "<group>.<name>" (texts start "Robot <group>: "); the door is the cell's, one door_open for all."""
+    if len(arms) == 1:
+        tool = arms[0][1]
+        table = {"protective_stop": FAULTS["protective_stop"], f"{tool}_fault": TOOL_FAULTS[tool],
+                 "door_open": FAULTS["door_open"], "force_limit": FAULTS["force_limit"]}
+        return table, [{"protective_stop": "protective_stop", "tool_fault": f"{tool}_fault",
+                        "door_open": "door_open", "force_limit": "force_limit"}]
+    table: dict[str, tuple[str, int]] = {}
+    ids = []
+    for group, tool in arms:
+        own = {"protective_stop": f"{group}.protective_stop", "tool_fault": f"{group}.{tool}_fault",
+               "door_open": "door_open", "force_limit": f"{group}.force_limit"}
+        for name, source in (("protective_stop", FAULTS["protective_stop"]), ("tool_fault", TOOL_FAULTS[tool]),
+                             ("force_limit", FAULTS["force_limit"])):
+            table[own[name]] = (f"Robot {group}: {source[0]}", source[1])
+        ids.append(own)
+    table["door_open"] = FAULTS["door_open"]
+    return table, ids
 
 
 @dataclass
@@ -31,9 +58,9 @@ class Fault:
 class FaultBook:
     """Current state of every known fault; listeners hear about each change (the ROS bridge republishes)."""
 
-    def __init__(self) -> None:
+    def __init__(self, table: Optional[Mapping[str, tuple[str, int]]] = None) -> None:
         self._lock = threading.Lock()
-        self.faults = {k: Fault(k, text, sev) for k, (text, sev) in FAULTS.items()}
+        self.faults = {k: Fault(k, text, sev) for k, (text, sev) in (table or FAULTS).items()}
         self._listeners: list[Callable[[list[Fault]], None]] = []
 
     def subscribe(self, fn: Callable[[list[Fault]], None]) -> None:

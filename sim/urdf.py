@@ -1,7 +1,8 @@
-"""Generate the UR5 + F/T sensor + two-finger gripper URDF from the DH parameters (primitive shapes).
+"""Generate the UR5 + F/T sensor + tool URDF from the DH parameters (primitive shapes).
 
 Each revolute joint i sits at DH frame i-1 and turns about its z axis; the fixed offset to the next joint is
 Tz(d_i) Tx(a_i) Rx(alpha_i), so the URDF reproduces the DH forward kinematics exactly.
+Tools: the two-finger gripper (the demo's) or a vacuum tool (a body and a short suction cup; TCP at the cup face).
 """
 from __future__ import annotations
 
@@ -21,6 +22,15 @@ FINGER_WIDTH = 0.022
 FINGER_TRAVEL = 0.045     # each finger's inner face: 0 (closed) .. 0.045 m from the centre
 TCP_Z = FT_LENGTH + GRIPPER_BASE + FINGER_LENGTH - 0.015  # between the fingertips
 DEFAULT_TCP = (0.0, 0.0, TCP_Z, 0.0, 0.0, 0.0)
+# Vacuum tool: a body, then a short suction cup whose link frame is at its face.
+VACUUM_BODY_LENGTH = 0.05
+VACUUM_BODY_RADIUS = 0.03
+CUP_LENGTH = 0.02
+CUP_RADIUS = 0.016
+CUP_LINK = "suction_cup"
+VACUUM_TCP_Z = FT_LENGTH + VACUUM_BODY_LENGTH + CUP_LENGTH  # at the cup face
+VACUUM_TCP = (0.0, 0.0, VACUUM_TCP_Z, 0.0, 0.0, 0.0)
+TOOLS = ("gripper", "vacuum")
 
 ARM_JOINTS = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
               "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
@@ -50,12 +60,18 @@ def _segment(x: float, z: float, radius: float, color: str) -> str:
             f'<collision>{org}{geo}</collision>')
 
 
+def default_tcp(tool: str = "gripper") -> tuple[float, ...]:
+    return VACUUM_TCP if tool == "vacuum" else DEFAULT_TCP
+
+
 def _joint_disk(radius: float) -> str:
     geo = f'<geometry><cylinder radius="{radius}" length="{radius * 2.2:.4f}"/></geometry>'
     return f'<visual><origin xyz="0 0 0"/>{geo}<material name="ur_blue"/></visual>'
 
 
-def urdf_text() -> str:
+def urdf_text(tool: str = "gripper") -> str:
+    if tool not in TOOLS:
+        raise ValueError(f"unknown tool {tool!r}")
     parts = ['<?xml version="1.0"?>', '<robot name="ur5_cell_arm">',
              '<material name="ur_grey"><color rgba="0.75 0.75 0.78 1"/></material>',
              '<material name="ur_blue"><color rgba="0.2 0.45 0.75 1"/></material>',
@@ -87,6 +103,15 @@ def urdf_text() -> str:
                  f'<collision><origin xyz="0 0 {FT_LENGTH / 2}"/>{ft_geo}</collision></link>')
     parts.append(f'<joint name="{FT_JOINT}" type="fixed"><parent link="flange"/><child link="ft_sensor"/>'
                  f'<origin xyz="0 0 0"/></joint>')
+    if tool == "vacuum":
+        _vacuum_tool(parts)
+    else:
+        _gripper(parts)
+    parts.append('</robot>')
+    return "\n".join(parts)
+
+
+def _gripper(parts: list[str]) -> None:
     body_geo = f'<geometry><box size="0.05 {2 * FINGER_TRAVEL + 2 * FINGER_THICK + 0.02:.4f} {GRIPPER_BASE}"/></geometry>'
     parts.append(f'<link name="gripper_body">{_inertial(0.6)}'
                  f'<visual><origin xyz="0 0 {GRIPPER_BASE / 2}"/>{body_geo}<material name="ur_grey"/></visual>'
@@ -103,14 +128,28 @@ def urdf_text() -> str:
         parts.append(f'<joint name="{name}_joint" type="prismatic"><parent link="gripper_body"/><child link="{name}"/>'
                      f'<origin xyz="0 0 {GRIPPER_BASE}"/><axis xyz="0 {sign} 0"/>'
                      f'<limit lower="0" upper="{FINGER_TRAVEL}" effort="60" velocity="0.15"/></joint>')
-    parts.append('</robot>')
-    return "\n".join(parts)
 
 
-def write_urdf(directory: Optional[str] = None) -> str:
-    """Write the generated URDF to a file (PyBullet loads files) and return its path."""
+def _vacuum_tool(parts: list[str]) -> None:
+    body_geo = f'<geometry><cylinder radius="{VACUUM_BODY_RADIUS}" length="{VACUUM_BODY_LENGTH}"/></geometry>'
+    parts.append(f'<link name="vacuum_body">{_inertial(0.4)}'
+                 f'<visual><origin xyz="0 0 {VACUUM_BODY_LENGTH / 2}"/>{body_geo}<material name="ur_grey"/></visual>'
+                 f'<collision><origin xyz="0 0 {VACUUM_BODY_LENGTH / 2}"/>{body_geo}</collision></link>')
+    parts.append(f'<joint name="vacuum_mount" type="fixed"><parent link="ft_sensor"/><child link="vacuum_body"/>'
+                 f'<origin xyz="0 0 {FT_LENGTH}"/></joint>')
+    cup_geo = f'<geometry><cylinder radius="{CUP_RADIUS}" length="{CUP_LENGTH}"/></geometry>'
+    parts.append(f'<link name="{CUP_LINK}">{_inertial(0.05, 0.02)}'
+                 f'<visual><origin xyz="0 0 {-CUP_LENGTH / 2}"/>{cup_geo}<material name="pad"/></visual>'
+                 f'<collision><origin xyz="0 0 {-CUP_LENGTH / 2}"/>{cup_geo}</collision></link>')
+    parts.append(f'<joint name="cup_mount" type="fixed"><parent link="vacuum_body"/><child link="{CUP_LINK}"/>'
+                 f'<origin xyz="0 0 {VACUUM_BODY_LENGTH + CUP_LENGTH}"/></joint>')
+
+
+def write_urdf(directory: Optional[str] = None, tool: str = "gripper") -> str:
+    """Write the generated URDF of an arm with `tool` to a file (PyBullet loads files) and return its path."""
     directory = directory or tempfile.mkdtemp(prefix="sim-urdf-")
-    path = os.path.join(directory, "ur5_gripper.urdf")
-    with open(path, "w") as fh:
-        fh.write(urdf_text())
+    path = os.path.join(directory, f"ur5_{tool}.urdf")
+    if not os.path.exists(path):
+        with open(path, "w") as fh:
+            fh.write(urdf_text(tool))
     return path

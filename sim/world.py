@@ -1,10 +1,16 @@
-"""The physical cell in PyBullet: UR5 + F/T sensor + gripper, table, graspable cubes, a fixture.
+"""The physical cell in PyBullet: UR5 arms (each with an F/T sensor and a gripper or a vacuum tool), a table,
+graspable cubes, stations (fixtures with pockets, flat stands).
 
-One World owns one PyBullet client (DIRECT, headless), so several cells live side by side in one process.
+What is built comes from a WorldSpec (sim/scene.py; the cell file's `simulation:` section). The default is the demo
+world: one arm at the origin with the two-finger gripper, three cubes from the seed, a three-pocket fixture.
+One World owns one PyBullet client (DIRECT, headless): every arm of the cell lives in this one physics world (a part
+handed over from one arm to the other is in both their reach), stepped once per controller tick.
 The same construction code builds the render-only replica used by the camera process.
 """
 from __future__ import annotations
 
+import math
+import tempfile
 from dataclasses import dataclass
 from typing import Optional, Sequence
 
@@ -13,17 +19,31 @@ import pybullet
 from pybullet_utils import bullet_client
 
 from . import urdf
+from .scene import DEFAULT_WORLD, ArmSpec, PartsSpec, StationSpec, WorldSpec, yaw_quaternion
 
 PHYSICS_HZ = 500          # fixed physics step; also the controller tick (UR e-Series runs at 500 Hz)
 DT = 1.0 / PHYSICS_HZ
 HOME_Q = (0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0)
 ARM_FORCES = (330.0, 330.0, 150.0, 56.0, 56.0, 56.0)   # max joint torques (N m), UR5 sizes 3/3/3/1/1/1
 GRIPPER_FORCE = 40.0      # N per finger
-CUBE_SIZE = 0.04
+CUBE_SIZE = 0.04          # the demo's parts (PartsSpec.size)
 CUBE_MASS = 0.1
 TABLE_SIZE = (1.4, 1.2, 0.04)
 FIXTURE_POS = (-0.35, 0.35)
 TACTILE_TAXELS = 8
+POCKET_CLEARANCE = 0.008  # a pocket is this much wider than a part
+FIXTURE_WALL = 0.01
+FIXTURE_WALL_HEIGHT = 0.015
+FIXTURE_PLATE = 0.006     # plate thickness: a part resting in a pocket has its bottom here
+# Vacuum: a part is sucked on when its face is within VACUUM_REACH of the cup face (or up to VACUUM_PRESS into it,
+# pressed), its centre within VACUUM_CENTRE of the cup axis and that face square to the cup within VACUUM_TILT.
+VACUUM_REACH = 0.005
+VACUUM_PRESS = 0.003
+VACUUM_CENTRE = 0.012
+VACUUM_TILT = math.radians(15)
+VACUUM_FORCE = 40.0       # N the suction holds with (a held 0.1 kg cube needs 1 N; a collision tears it off less)
+PART_COLORS = [(0.85, 0.15, 0.15, 1), (0.15, 0.7, 0.2, 1), (0.2, 0.3, 0.9, 1), (0.9, 0.75, 0.1, 1),
+               (0.6, 0.2, 0.7, 1), (0.1, 0.7, 0.75, 1)]
 
 
 @dataclass
@@ -33,14 +53,239 @@ class ArmState:
     torque: np.ndarray
 
 
+class RobotArm:
+    """One UR5 in the world, with its tool. Its readings are in its own base frame, like a UR controller's."""
+
+    def __init__(self, world: "World", spec: ArmSpec) -> None:
+        p = world.p
+        self.world, self.p, self.spec = world, p, spec
+        self.group = spec.group
+        self.tool = spec.tool.kind
+        self.at_origin = spec.at_origin
+        self.base_pos, self.base_orn = tuple(spec.base), yaw_quaternion(spec.yaw)
+        self._inv_base = p.invertTransform(self.base_pos, self.base_orn)
+        self._base_rot = np.array(p.getMatrixFromQuaternion(self.base_orn)).reshape(3, 3)
+        flags = pybullet.URDF_USE_INERTIA_FROM_FILE
+        self.robot = p.loadURDF(urdf.write_urdf(world.urdf_dir, self.tool), basePosition=self.base_pos,
+                                baseOrientation=self.base_orn, useFixedBase=True, flags=flags)
+        names = {p.getJointInfo(self.robot, j)[1].decode(): j for j in range(p.getNumJoints(self.robot))}
+        link_names = {p.getJointInfo(self.robot, j)[12].decode(): j for j in range(p.getNumJoints(self.robot))}
+        self.arm_joints = [names[n] for n in urdf.ARM_JOINTS]
+        self.finger_joints = [names[n] for n in urdf.FINGER_JOINTS] if self.tool == "gripper" else []
+        self.ft_joint = names[urdf.FT_JOINT]
+        self.all_joints = self.arm_joints + self.finger_joints
+        self.flange_link = link_names["flange"]
+        self.elbow_link = link_names["link_3"]
+        self.tactile_link = link_names[urdf.TACTILE_LINK] if self.tool == "gripper" else None
+        self.finger_links = [link_names["finger_left"], link_names["finger_right"]] if self.tool == "gripper" else []
+        self.cup_link = link_names[urdf.CUP_LINK] if self.tool == "vacuum" else None
+        for j in self.all_joints:  # disable the default velocity motors; we command every joint
+            p.setJointMotorControl2(self.robot, j, pybullet.VELOCITY_CONTROL, force=0)
+        self.start_q = HOME_Q if spec.start_joints is None else tuple(spec.start_joints)
+        for j, q in zip(self.arm_joints, self.start_q):
+            p.resetJointState(self.robot, j, q)
+        for link in self.finger_links:
+            p.changeDynamics(self.robot, link, lateralFriction=1.2, spinningFriction=0.01)
+        if self.tool == "gripper":
+            # The fingers are coupled, as on a real parallel gripper (one drive through a rack or linkage): they move
+            # together, so a gripped part stays centred. Two independent position-controlled fingers clamping a part
+            # both push with their full force wherever it is, and the part slid from finger to finger when lifted.
+            gear = p.createConstraint(self.robot, self.finger_joints[0], self.robot, self.finger_joints[1],
+                                      pybullet.JOINT_GEAR, (0, 1, 0), (0, 0, 0), (0, 0, 0))
+            p.changeConstraint(gear, gearRatio=-1, erp=0.2, maxForce=10 * GRIPPER_FORCE)
+        p.enableJointForceTorqueSensor(self.robot, self.ft_joint, True)
+        self.arm_targets = np.array(self.start_q)
+        self.arm_target_vel = np.zeros(6)
+        self.gripper_closed = False   # gripper: closed commanded; vacuum: suction on
+        self.gripper_frozen = False   # a tool fault: the tool ignores its output
+        self.held: Optional[int] = None        # vacuum: the part on the cup
+        self._held_constraint: Optional[int] = None
+
+    def start(self) -> None:
+        """Command the tool and hold the home configuration (after the whole world is built)."""
+        if self.tool == "gripper":
+            self._command_fingers()
+        self.hold(np.array(self.start_q))
+
+    # ---- commands -----------------------------------------------------------------------------
+    def command_arm(self, q: np.ndarray, qd: np.ndarray) -> None:
+        """Joint position control toward q with feed-forward velocity qd (the motion planner's setpoint)."""
+        self.arm_targets = np.asarray(q, dtype=float)
+        self.arm_target_vel = np.asarray(qd, dtype=float)
+        self.p.setJointMotorControlArray(self.robot, self.arm_joints, pybullet.POSITION_CONTROL,
+                                         targetPositions=list(self.arm_targets),
+                                         targetVelocities=list(self.arm_target_vel),
+                                         forces=list(ARM_FORCES), positionGains=[0.6] * 6, velocityGains=[1.0] * 6)
+
+    def hold(self, q: np.ndarray) -> None:
+        self.command_arm(q, np.zeros(6))
+
+    def set_tool(self, on: bool) -> None:
+        """The tool's digital output: closes the gripper, or switches the suction on."""
+        if self.tool == "vacuum":
+            self.set_suction(on)
+        else:
+            self.set_gripper(on)
+
+    def set_gripper(self, closed: bool) -> None:
+        if self.gripper_frozen or closed == self.gripper_closed:
+            return
+        self.gripper_closed = closed
+        self._command_fingers()
+
+    def freeze_gripper(self, frozen: bool) -> None:
+        """A tool fault: the fingers stop where they are (the suction stays as it is) and ignore commands until reset."""
+        self.gripper_frozen = frozen
+        if self.tool != "gripper":
+            return
+        if frozen:
+            for j in self.finger_joints:
+                q = self.p.getJointState(self.robot, j)[0]
+                self.p.setJointMotorControl2(self.robot, j, pybullet.POSITION_CONTROL, targetPosition=q,
+                                             force=GRIPPER_FORCE, maxVelocity=0.1)
+        else:
+            self._command_fingers()
+
+    def _command_fingers(self) -> None:
+        target = 0.0 if self.gripper_closed else urdf.FINGER_TRAVEL
+        for j in self.finger_joints:
+            self.p.setJointMotorControl2(self.robot, j, pybullet.POSITION_CONTROL, targetPosition=target,
+                                         force=GRIPPER_FORCE, maxVelocity=0.12, positionGain=0.3)
+
+    # ---- vacuum -------------------------------------------------------------------------------
+    def set_suction(self, on: bool) -> None:
+        """Suction on: pick up a part lying square under the cup (checked every tick while on); off: let go."""
+        if self.gripper_frozen:
+            return
+        self.gripper_closed = on
+        if not on:
+            self._release()
+        elif self.held is None:
+            self._try_attach()
+
+    def _try_attach(self) -> None:
+        p = self.p
+        face_pos, face_orn = p.getLinkState(self.robot, self.cup_link, computeForwardKinematics=1)[4:6]
+        rot = np.array(p.getMatrixFromQuaternion(face_orn)).reshape(3, 3)
+        axis = rot[:, 2]  # out of the cup, toward the part
+        half = self.world.parts_spec.size / 2
+        for part in self.world.cubes:
+            if self.world.holder_of(part) is not None:
+                continue
+            pos, orn = p.getBasePositionAndOrientation(part)
+            rel = np.asarray(pos) - np.asarray(face_pos)
+            depth = float(rel @ axis)  # cup face to the part's centre, along the cup axis
+            gap = depth - half
+            if not -VACUUM_PRESS <= gap <= VACUUM_REACH:
+                continue
+            if float(np.linalg.norm(rel - depth * axis)) > VACUUM_CENTRE:
+                continue
+            part_rot = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3)
+            if float(np.max(np.abs(part_rot.T @ axis))) < math.cos(VACUUM_TILT):
+                continue  # no face of the cube lies flat against the cup
+            self._attach(part, face_pos, face_orn, rel, axis, half, rot)
+            return
+
+    def _attach(self, part: int, face_pos, face_orn, rel: np.ndarray, axis: np.ndarray, half: float,
+                rot: np.ndarray) -> None:
+        """A fixed constraint pulls the part's face against the cup (centred where it was, turned as it was)."""
+        p = self.p
+        lateral = rel - float(rel @ axis) * axis
+        in_cup = rot.T @ (lateral + half * axis)  # where the part's centre will be, in the cup frame
+        inv_pos, inv_orn = p.invertTransform(face_pos, face_orn)
+        _, rel_orn = p.multiplyTransforms(inv_pos, inv_orn, (0, 0, 0), p.getBasePositionAndOrientation(part)[1])
+        p.setCollisionFilterPair(self.robot, part, self.cup_link, -1, 0)
+        cid = p.createConstraint(self.robot, self.cup_link, part, -1, pybullet.JOINT_FIXED, (0, 0, 0),
+                                 tuple(float(v) for v in in_cup), (0, 0, 0), rel_orn, (0, 0, 0, 1))
+        p.changeConstraint(cid, maxForce=VACUUM_FORCE)
+        self.held, self._held_constraint = part, cid
+
+    def _release(self) -> None:
+        if self.held is None:
+            return
+        self.p.removeConstraint(self._held_constraint)
+        self.p.setCollisionFilterPair(self.robot, self.held, self.cup_link, -1, 1)
+        self.held, self._held_constraint = None, None
+
+    def tick_tool(self) -> None:
+        """Per tick: the switched-on suction takes a part that has come under the cup."""
+        if self.tool == "vacuum" and self.gripper_closed and self.held is None and not self.gripper_frozen:
+            self._try_attach()
+
+    # ---- readings -----------------------------------------------------------------------------
+    def arm_state(self) -> ArmState:
+        states = self.p.getJointStates(self.robot, self.arm_joints)
+        return ArmState(q=np.array([s[0] for s in states]), qd=np.array([s[1] for s in states]),
+                        torque=np.array([s[3] for s in states]))
+
+    def tcp_state(self, tcp_pos: Sequence[float], tcp_orn: Sequence[float]):
+        """TCP pose and twist from the physics' own forward kinematics (C++), in this arm's base frame.
+
+        Returns (flange position, flange quaternion, TCP position, TCP quaternion, linear velocity, angular velocity).
+        """
+        p = self.p
+        ls = p.getLinkState(self.robot, self.flange_link, computeLinkVelocity=1, computeForwardKinematics=1)
+        pos, orn, v, w = ls[4], ls[5], ls[6], ls[7]
+        if not self.at_origin:  # world -> base frame
+            pos, orn = p.multiplyTransforms(self._inv_base[0], self._inv_base[1], pos, orn)
+            v, w = tuple(self._base_rot.T @ np.asarray(v)), tuple(self._base_rot.T @ np.asarray(w))
+        tpos, torn = p.multiplyTransforms(pos, orn, tcp_pos, tcp_orn)
+        r = (tpos[0] - pos[0], tpos[1] - pos[1], tpos[2] - pos[2])
+        v_tcp = (v[0] + w[1] * r[2] - w[2] * r[1], v[1] + w[2] * r[0] - w[0] * r[2], v[2] + w[0] * r[1] - w[1] * r[0])
+        return pos, orn, tpos, torn, v_tcp, w
+
+    def elbow_position(self) -> tuple:
+        pos = self.p.getLinkState(self.robot, self.elbow_link, computeForwardKinematics=1)[4]
+        if not self.at_origin:
+            pos = self.p.multiplyTransforms(self._inv_base[0], self._inv_base[1], pos, (0, 0, 0, 1))[0]
+        return pos
+
+    def finger_positions(self) -> list[float]:
+        if not self.finger_joints:
+            return []
+        return [s[0] for s in self.p.getJointStates(self.robot, self.finger_joints)]
+
+    def ft_wrench(self) -> np.ndarray:
+        """Reaction wrench at the F/T joint, sensor frame (Fx Fy Fz Tx Ty Tz): what the tool pulls on the wrist."""
+        return np.array(self.p.getJointState(self.robot, self.ft_joint)[2])
+
+    def tactile(self) -> tuple[list[float], list[float]]:
+        """Pressure profile along the left finger pad: x = taxel centre (mm from finger root), y = force (N)."""
+        p = self.p
+        xs = [(k + 0.5) * urdf.FINGER_LENGTH / TACTILE_TAXELS * 1000 for k in range(TACTILE_TAXELS)]
+        forces = [0.0] * TACTILE_TAXELS
+        if self.tactile_link is None:
+            return xs, forces
+        pos, orn = p.getLinkState(self.robot, self.tactile_link)[4:6]
+        inv_pos, inv_orn = p.invertTransform(pos, orn)
+        for c in p.getContactPoints(bodyA=self.robot, linkIndexA=self.tactile_link):
+            if c[2] == self.robot:
+                continue
+            local, _ = p.multiplyTransforms(inv_pos, inv_orn, c[5], (0, 0, 0, 1))
+            k = int(local[2] / urdf.FINGER_LENGTH * TACTILE_TAXELS)
+            if 0 <= k < TACTILE_TAXELS:
+                forces[k] += c[9]
+        return xs, forces
+
+    def joint_positions(self) -> list[float]:
+        return [s[0] for s in self.p.getJointStates(self.robot, self.all_joints)]
+
+    def set_joint_positions(self, joints: Sequence[float]) -> None:
+        for j, q in zip(self.all_joints, joints):
+            self.p.resetJointState(self.robot, j, q)
+
+
 class World:
     """Builds and steps the cell. Not thread-safe: the controller loop is its only user."""
 
-    def __init__(self, seed: int = 0, render_only: bool = False, urdf_path: Optional[str] = None) -> None:
+    def __init__(self, seed: int = 0, render_only: bool = False, urdf_dir: Optional[str] = None,
+                 spec: WorldSpec = DEFAULT_WORLD) -> None:
         self.seed = seed
+        self.spec = spec
+        self.parts_spec: PartsSpec = spec.parts
         self.render_only = render_only
         self.p = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
-        self.urdf_path = urdf_path or urdf.write_urdf()
+        self.urdf_dir = urdf_dir or tempfile.mkdtemp(prefix="sim-urdf-")
         self.egl = render_only and self._load_egl()  # before building: EGL only sees shapes created after it
         self._build()
 
@@ -65,49 +310,20 @@ class World:
         for sx in (-1, 1):  # table legs, visual context for the global camera
             for sy in (-1, 1):
                 self._box((sx * 0.62, sy * 0.52, -0.4), (0.03, 0.03, 0.36), (0.25, 0.25, 0.25, 1), mass=0)
-        flags = pybullet.URDF_USE_INERTIA_FROM_FILE
-        self.robot = p.loadURDF(self.urdf_path, basePosition=(0, 0, 0), useFixedBase=True, flags=flags)
-        names = {p.getJointInfo(self.robot, j)[1].decode(): j for j in range(p.getNumJoints(self.robot))}
-        self.arm_joints = [names[n] for n in urdf.ARM_JOINTS]
-        self.finger_joints = [names[n] for n in urdf.FINGER_JOINTS]
-        self.ft_joint = names[urdf.FT_JOINT]
-        self.all_joints = self.arm_joints + self.finger_joints
-        link_names = {p.getJointInfo(self.robot, j)[12].decode(): j for j in range(p.getNumJoints(self.robot))}
-        self.tactile_link = link_names[urdf.TACTILE_LINK]
-        self.flange_link = link_names["flange"]
-        self.elbow_link = link_names["link_3"]
-        self.finger_links = [link_names["finger_left"], link_names["finger_right"]]
-        for j in self.all_joints:  # disable the default velocity motors; we command every joint
-            p.setJointMotorControl2(self.robot, j, pybullet.VELOCITY_CONTROL, force=0)
-        for j, q in zip(self.arm_joints, HOME_Q):
-            p.resetJointState(self.robot, j, q)
-        for link in self.finger_links:
-            p.changeDynamics(self.robot, link, lateralFriction=1.2, spinningFriction=0.01)
-        # The fingers are coupled, as on a real parallel gripper (one drive through a rack or linkage): they move
-        # together, so a gripped part stays centred. Two independent position-controlled fingers clamping a part
-        # both push with their full force wherever it is, and the part slid from finger to finger when lifted.
-        gear = p.createConstraint(self.robot, self.finger_joints[0], self.robot, self.finger_joints[1],
-                                  pybullet.JOINT_GEAR, (0, 1, 0), (0, 0, 0), (0, 0, 0))
-        p.changeConstraint(gear, gearRatio=-1, erp=0.2, maxForce=10 * GRIPPER_FORCE)
-        p.enableJointForceTorqueSensor(self.robot, self.ft_joint, True)
-        self._build_fixture()
-        rng = np.random.default_rng(self.seed)
-        self.cubes = []
-        colors = [(0.85, 0.15, 0.15, 1), (0.15, 0.7, 0.2, 1), (0.2, 0.3, 0.9, 1)]
-        for i in range(3):
-            x = -0.45 + rng.uniform(-0.03, 0.03)
-            y = -0.25 + 0.12 * i + rng.uniform(-0.02, 0.02)
-            yaw = rng.uniform(-0.3, 0.3)
-            cube = self._box((x, y, CUBE_SIZE / 2), (CUBE_SIZE / 2,) * 3, colors[i], mass=CUBE_MASS,
-                             orn=p.getQuaternionFromEuler((0, 0, yaw)))
-            p.changeDynamics(cube, -1, lateralFriction=1.0, spinningFriction=0.005)
-            self.cubes.append(cube)
-        self.arm_targets = np.array(HOME_Q)
-        self.arm_target_vel = np.zeros(6)
-        self.gripper_closed = False
-        self.gripper_frozen = False
-        self._command_fingers()
-        self.hold(np.array(HOME_Q))
+        self.arms = [RobotArm(self, a) for a in self.spec.arms]
+        self.stations: dict[str, int] = {}
+        self.pockets: dict[str, list[tuple[float, float]]] = {}
+        for st in self.spec.stations:
+            if st.kind == "stand":
+                self.stations[st.name] = self._build_stand(st)
+            else:
+                self.stations[st.name], self.pockets[st.name] = self._build_fixture(st)
+        fixtures = [st.name for st in self.spec.stations if st.kind == "fixture"]
+        self.fixture = self.stations[fixtures[0]] if fixtures else None
+        self.fixture_slots = self.pockets[fixtures[0]] if fixtures else []
+        self.cubes = self._build_parts(self.spec.parts)
+        for arm in self.arms:
+            arm.start()
 
     def _box(self, pos: Sequence[float], half: Sequence[float], rgba: Sequence[float], mass: float,
              orn: Sequence[float] = (0, 0, 0, 1)) -> int:
@@ -117,20 +333,54 @@ class World:
         return p.createMultiBody(baseMass=mass, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
                                  basePosition=pos, baseOrientation=orn)
 
-    def _build_fixture(self) -> None:
-        """A plate with three square pockets (walls 1.5 cm high) that take one cube each."""
+    def _build_parts(self, spec: PartsSpec) -> list[int]:
         p = self.p
-        pocket = CUBE_SIZE + 0.008
-        wall = 0.01
-        h = 0.015
+        rng = np.random.default_rng(self.seed)
+        cubes = []
+        jx, jy, jyaw = spec.jitter
+        for i in range(spec.number):
+            if spec.positions is not None:
+                x0, y0, yaw0 = spec.positions[i]
+            else:
+                x0 = spec.start[0] + spec.step[0] * i
+                y0 = spec.start[1] + spec.step[1] * i
+                yaw0 = 0.0
+            # Drawn in this order (x, y, yaw) per part: the demo's placement for a seed depends on it.
+            x = x0 + rng.uniform(-jx, jx)
+            y = y0 + rng.uniform(-jy, jy)
+            yaw = yaw0 + rng.uniform(-jyaw, jyaw)
+            cube = self._box((x, y, spec.size / 2), (spec.size / 2,) * 3, PART_COLORS[i % len(PART_COLORS)],
+                             mass=spec.mass, orn=p.getQuaternionFromEuler((0, 0, yaw)))
+            p.changeDynamics(cube, -1, lateralFriction=1.0, spinningFriction=0.005)
+            cubes.append(cube)
+        return cubes
+
+    def _build_stand(self, st: StationSpec) -> int:
+        half = (st.size[0] / 2, st.size[1] / 2, st.height / 2)
+        return self._box((st.position[0], st.position[1], st.height / 2), half, (0.45, 0.5, 0.55, 1), mass=0,
+                         orn=yaw_quaternion(st.yaw))
+
+    def _build_fixture(self, st: StationSpec) -> tuple[int, list[tuple[float, float]]]:
+        """A plate with square pockets (walls 1.5 cm high) that take one part each."""
+        if isinstance(st.pockets, int):
+            return self._build_fixture_row(st)
+        return self._build_fixture_free(st)
+
+    def _build_fixture_row(self, st: StationSpec) -> tuple[int, list[tuple[float, float]]]:
+        """N pockets in a row along the station's y axis, centred on its position (the demo's fixture)."""
+        p = self.p
+        n = st.pockets
+        pocket = self.spec.parts.size + POCKET_CLEARANCE
+        wall = FIXTURE_WALL
+        h = FIXTURE_WALL_HEIGHT
         halves, positions = [], []
-        halves.append((0.1, (3 * pocket + 4 * wall) / 2, 0.003))
+        halves.append((0.1, (n * pocket + (n + 1) * wall) / 2, 0.003))
         positions.append((0, 0, 0.003))
-        span = 3 * pocket + 4 * wall
+        span = n * pocket + (n + 1) * wall
         for sx in (-1, 1):  # long walls
             halves.append((wall / 2, span / 2, h / 2))
             positions.append((sx * (pocket / 2 + wall / 2), 0, 0.006 + h / 2))
-        for k in range(4):  # cross walls between pockets
+        for k in range(n + 1):  # cross walls between pockets
             y = -span / 2 + wall / 2 + k * (pocket + wall)
             halves.append((pocket / 2 + wall, wall / 2, h / 2))
             positions.append((0, y, 0.006 + h / 2))
@@ -138,107 +388,101 @@ class World:
                                           collisionFramePositions=positions)
         vis = p.createVisualShapeArray([pybullet.GEOM_BOX] * len(halves), halfExtents=halves,
                                        visualFramePositions=positions, rgbaColors=[(0.6, 0.6, 0.65, 1)] * len(halves))
-        self.fixture = p.createMultiBody(baseMass=0, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
-                                         basePosition=(FIXTURE_POS[0], FIXTURE_POS[1], 0))
-        self.fixture_slots = [(FIXTURE_POS[0], FIXTURE_POS[1] - span / 2 + wall + pocket / 2 + k * (pocket + wall))
-                              for k in range(3)]
-
-    # ---- commands -----------------------------------------------------------------------------
-    def command_arm(self, q: np.ndarray, qd: np.ndarray) -> None:
-        """Joint position control toward q with feed-forward velocity qd (the motion planner's setpoint)."""
-        self.arm_targets = np.asarray(q, dtype=float)
-        self.arm_target_vel = np.asarray(qd, dtype=float)
-        self.p.setJointMotorControlArray(self.robot, self.arm_joints, pybullet.POSITION_CONTROL,
-                                         targetPositions=list(self.arm_targets),
-                                         targetVelocities=list(self.arm_target_vel),
-                                         forces=list(ARM_FORCES), positionGains=[0.6] * 6, velocityGains=[1.0] * 6)
-
-    def hold(self, q: np.ndarray) -> None:
-        self.command_arm(q, np.zeros(6))
-
-    def set_gripper(self, closed: bool) -> None:
-        if self.gripper_frozen or closed == self.gripper_closed:
-            return
-        self.gripper_closed = closed
-        self._command_fingers()
-
-    def freeze_gripper(self, frozen: bool) -> None:
-        """A gripper fault: the fingers stop where they are and ignore commands until reset."""
-        self.gripper_frozen = frozen
-        if frozen:
-            for j in self.finger_joints:
-                q = self.p.getJointState(self.robot, j)[0]
-                self.p.setJointMotorControl2(self.robot, j, pybullet.POSITION_CONTROL, targetPosition=q,
-                                             force=GRIPPER_FORCE, maxVelocity=0.1)
+        px, py = st.position
+        body = p.createMultiBody(baseMass=0, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
+                                 basePosition=(px, py, 0), baseOrientation=yaw_quaternion(st.yaw))
+        if st.yaw == 0.0:
+            slots = [(px, py - span / 2 + wall + pocket / 2 + k * (pocket + wall)) for k in range(n)]
         else:
-            self._command_fingers()
+            c, s = math.cos(st.yaw), math.sin(st.yaw)
+            local = [-span / 2 + wall + pocket / 2 + k * (pocket + wall) for k in range(n)]
+            slots = [(px - s * ly, py + c * ly) for ly in local]
+        return body, slots
 
-    def _command_fingers(self) -> None:
-        target = 0.0 if self.gripper_closed else urdf.FINGER_TRAVEL
-        for j in self.finger_joints:
-            self.p.setJointMotorControl2(self.robot, j, pybullet.POSITION_CONTROL, targetPosition=target,
-                                         force=GRIPPER_FORCE, maxVelocity=0.12, positionGain=0.3)
+    def _build_fixture_free(self, st: StationSpec) -> tuple[int, list[tuple[float, float]]]:
+        """One walled pocket at each given world position (turned by the station's yaw) on a common plate."""
+        p = self.p
+        pocket = self.spec.parts.size + POCKET_CLEARANCE
+        wall, h = FIXTURE_WALL, FIXTURE_WALL_HEIGHT
+        pts = np.array(st.pockets, dtype=float)
+        centre = (pts.min(axis=0) + pts.max(axis=0)) / 2
+        reach = pocket / 2 + wall + 0.01
+        plate_half = tuple((pts.max(axis=0) - pts.min(axis=0)) / 2 + reach)
+        halves = [(plate_half[0], plate_half[1], FIXTURE_PLATE / 2)]
+        positions = [(0.0, 0.0, FIXTURE_PLATE / 2)]
+        orns = [(0.0, 0.0, 0.0, 1.0)]
+        c, s = math.cos(st.yaw), math.sin(st.yaw)
+        q = yaw_quaternion(st.yaw)
+        for x, y in pts - centre:
+            for lx, ly, hx, hy in ((pocket / 2 + wall / 2, 0, wall / 2, pocket / 2 + wall),
+                                   (-pocket / 2 - wall / 2, 0, wall / 2, pocket / 2 + wall),
+                                   (0, pocket / 2 + wall / 2, pocket / 2, wall / 2),
+                                   (0, -pocket / 2 - wall / 2, pocket / 2, wall / 2)):
+                halves.append((hx, hy, h / 2))
+                positions.append((x + c * lx - s * ly, y + s * lx + c * ly, FIXTURE_PLATE + h / 2))
+                orns.append(q)
+        col = p.createCollisionShapeArray([pybullet.GEOM_BOX] * len(halves), halfExtents=halves,
+                                          collisionFramePositions=positions, collisionFrameOrientations=orns)
+        vis = p.createVisualShapeArray([pybullet.GEOM_BOX] * len(halves), halfExtents=halves,
+                                       visualFramePositions=positions, visualFrameOrientations=orns,
+                                       rgbaColors=[(0.6, 0.6, 0.65, 1)] * len(halves))
+        body = p.createMultiBody(baseMass=0, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
+                                 basePosition=(float(centre[0]), float(centre[1]), 0))
+        return body, [(float(x), float(y)) for x, y in pts]
 
+    # ---- the demo's single arm (and tests written for it) ------------------------------------
+    @property
+    def arm(self) -> RobotArm:
+        return self.arms[0]
+
+    @property
+    def robot(self) -> int:
+        return self.arms[0].robot
+
+    @property
+    def arm_joints(self) -> list[int]:
+        return self.arms[0].arm_joints
+
+    @property
+    def ft_joint(self) -> int:
+        return self.arms[0].ft_joint
+
+    def arm_state(self) -> ArmState:
+        return self.arms[0].arm_state()
+
+    def arm_for(self, group: str) -> RobotArm:
+        for a in self.arms:
+            if a.group == group:
+                return a
+        raise KeyError(group)
+
+    # ---- stepping and readings ----------------------------------------------------------------
     def step(self) -> None:
         self.p.stepSimulation()
 
-    # ---- readings -----------------------------------------------------------------------------
-    def arm_state(self) -> ArmState:
-        states = self.p.getJointStates(self.robot, self.arm_joints)
-        return ArmState(q=np.array([s[0] for s in states]), qd=np.array([s[1] for s in states]),
-                        torque=np.array([s[3] for s in states]))
-
-    def tcp_state(self, tcp_pos: Sequence[float], tcp_orn: Sequence[float]):
-        """TCP pose and twist from the physics' own forward kinematics (C++; the base frame is the world frame).
-
-        Returns (flange position, flange quaternion, TCP position, TCP quaternion, linear velocity, angular velocity).
-        """
-        p = self.p
-        ls = p.getLinkState(self.robot, self.flange_link, computeLinkVelocity=1, computeForwardKinematics=1)
-        pos, orn, v, w = ls[4], ls[5], ls[6], ls[7]
-        tpos, torn = p.multiplyTransforms(pos, orn, tcp_pos, tcp_orn)
-        r = (tpos[0] - pos[0], tpos[1] - pos[1], tpos[2] - pos[2])
-        v_tcp = (v[0] + w[1] * r[2] - w[2] * r[1], v[1] + w[2] * r[0] - w[0] * r[2], v[2] + w[0] * r[1] - w[1] * r[0])
-        return pos, orn, tpos, torn, v_tcp, w
-
-    def elbow_position(self) -> tuple:
-        return self.p.getLinkState(self.robot, self.elbow_link, computeForwardKinematics=1)[4]
-
-    def finger_positions(self) -> list[float]:
-        return [s[0] for s in self.p.getJointStates(self.robot, self.finger_joints)]
-
-    def ft_wrench(self) -> np.ndarray:
-        """Reaction wrench at the F/T joint, sensor frame (Fx Fy Fz Tx Ty Tz): what the gripper pulls on the wrist."""
-        return np.array(self.p.getJointState(self.robot, self.ft_joint)[2])
-
-    def tactile(self) -> tuple[list[float], list[float]]:
-        """Pressure profile along the left finger pad: x = taxel centre (mm from finger root), y = force (N)."""
-        p = self.p
-        pos, orn = p.getLinkState(self.robot, self.tactile_link)[4:6]
-        inv_pos, inv_orn = p.invertTransform(pos, orn)
-        forces = [0.0] * TACTILE_TAXELS
-        for c in p.getContactPoints(bodyA=self.robot, linkIndexA=self.tactile_link):
-            if c[2] == self.robot:
-                continue
-            local, _ = p.multiplyTransforms(inv_pos, inv_orn, c[5], (0, 0, 0, 1))
-            k = int(local[2] / urdf.FINGER_LENGTH * TACTILE_TAXELS)
-            if 0 <= k < TACTILE_TAXELS:
-                forces[k] += c[9]
-        xs = [(k + 0.5) * urdf.FINGER_LENGTH / TACTILE_TAXELS * 1000 for k in range(TACTILE_TAXELS)]
-        return xs, forces
+    def holder_of(self, part: int) -> Optional[RobotArm]:
+        """The arm whose suction cup holds this part (None: none)."""
+        for a in self.arms:
+            if a.held == part:
+                return a
+        return None
 
     def body_poses(self) -> list[tuple[tuple, tuple]]:
+        """The parts' poses in the world frame, in creation order."""
         return [self.p.getBasePositionAndOrientation(c) for c in self.cubes]
 
     def snapshot(self) -> tuple[list[float], list[tuple[tuple, tuple]]]:
-        """What a render replica needs: every robot joint position and every free body's pose."""
-        joints = [s[0] for s in self.p.getJointStates(self.robot, self.all_joints)]
+        """What a render replica needs: every robot joint position (arm by arm) and every free body's pose."""
+        joints = [q for a in self.arms for q in a.joint_positions()]
         return joints, self.body_poses()
 
     def apply_snapshot(self, snap: tuple[list[float], list[tuple[tuple, tuple]]]) -> None:
         joints, bodies = snap
-        for j, q in zip(self.all_joints, joints):
-            self.p.resetJointState(self.robot, j, q)
+        k = 0
+        for a in self.arms:
+            n = len(a.all_joints)
+            a.set_joint_positions(joints[k:k + n])
+            k += n
         for body, (pos, orn) in zip(self.cubes, bodies):
             self.p.resetBasePositionAndOrientation(body, pos, orn)
 

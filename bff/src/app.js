@@ -110,7 +110,10 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     },
   }));
   app.get('/api/config', requireSession, (req, res) => res.json(configFor(cell, features, req.session.role)));
-  app.use(controlRoutes({ lease, cell }));
+  // Roles whose commands include a feature with motion commands (the features that need the lease).
+  const movers = new Set(features.filter((f) => f.motion).map((f) => f.id));
+  const mayControl = (/** @type {string} */ role) => (cell.roles[role]?.commands ?? []).some((c) => movers.has(c));
+  app.use(controlRoutes({ lease, cell, mayControl }));
   for (const f of features) {
     if (!f.routes) continue;
     app.use(f.routes({

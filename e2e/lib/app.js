@@ -4,7 +4,7 @@ import { WebSocket } from 'ws';
 
 export const users = () => JSON.parse(process.env.E2E_USERS);
 
-/** @param {import('@playwright/test').Page} page @param {'admin'|'operator'} who */
+/** @param {import('@playwright/test').Page} page @param {string} who a role of the cell file (its user is named after it) */
 export async function loginAs(page, who) {
   await page.goto('/login');
   await page.getByTestId('login-username').fill(who);

@@ -1,6 +1,27 @@
-// Watching the arm from outside the app, as an engineer would with `rostopic echo`: a plain rosbridge client
-// on the stack's own rosbridge port (loopback, behind the BFF), subscribed to the driver's /joint_states.
+// Watching an arm from outside the app, as an engineer would with `rostopic echo`: a plain rosbridge client
+// on the stack's own rosbridge port (loopback, behind the BFF), subscribed to the driver's /joint_states (every
+// arm publishes its own joints there, with the cell file's names) or to a group's /cell/manual/<group>/state.
+// The group defaults to the first motion group of the cell file under test (E2E_CELL_CONFIG; the demo's `arm`).
+import fs from 'node:fs';
+import path from 'node:path';
+import yaml from 'js-yaml';
 import { WebSocket } from 'ws';
+import { REPO_ROOT } from './stack.js';
+
+/** The motion groups of the cell file under test. @returns {{ name: string, joints: string[] }[]} */
+export function cellGroups() {
+  const file = path.resolve(REPO_ROOT, process.env.E2E_CELL_CONFIG || 'config/demo-cell.yaml');
+  const cell = /** @type {any} */ (yaml.load(fs.readFileSync(file, 'utf8')));
+  return cell?.manual?.groups ?? [];
+}
+
+/** @param {string} [group] @returns {{ name: string, joints: string[] }} */
+function groupOf(group) {
+  const groups = cellGroups();
+  const g = group === undefined ? groups[0] : groups.find((x) => x.name === group);
+  if (!g) throw new Error(`no motion group ${group ?? '(none)'} in the cell file`);
+  return g;
+}
 
 /**
  * @typedef {object} RobotWatch
@@ -10,8 +31,14 @@ import { WebSocket } from 'ws';
  * @property {() => void} close
  */
 
-/** @param {string} url e.g. ws://127.0.0.1:18082 @returns {Promise<RobotWatch>} */
-export async function watchRobot(url = process.env.E2E_ROSBRIDGE_URL || '') {
+/**
+ * One group's joints from /joint_states (the messages of its arm, in the group's joint order).
+ * @param {string} [group] default: the cell's first group
+ * @param {string} [url] e.g. ws://127.0.0.1:18082
+ * @returns {Promise<RobotWatch>}
+ */
+export async function watchRobot(group, url = process.env.E2E_ROSBRIDGE_URL || '') {
+  const { name: groupName, joints } = groupOf(group);
   const ws = new WebSocket(url);
   /** @type {{position: number[], velocity: number[]} | null} */
   let last = null;
@@ -20,14 +47,19 @@ export async function watchRobot(url = process.env.E2E_ROSBRIDGE_URL || '') {
   ws.on('message', (d) => {
     const m = JSON.parse(d.toString());
     if (m.op !== 'publish' || m.topic !== '/joint_states') return;
-    last = m.msg;
-    for (const l of listeners) l(m.msg);
+    // Several arms share the topic: keep this group's joints, in its order (skip another arm's message).
+    const names = Array.isArray(m.msg?.name) ? m.msg.name : [];
+    const idx = joints.map((j) => names.indexOf(j));
+    if (idx.some((i) => i < 0)) return;
+    const msg = { position: idx.map((i) => m.msg.position[i]), velocity: idx.map((i) => m.msg.velocity?.[i] ?? 0) };
+    last = msg;
+    for (const l of listeners) l(msg);
   });
   await new Promise((resolve, reject) => { ws.once('open', resolve); ws.once('error', reject); });
   ws.send(JSON.stringify({ op: 'subscribe', id: 'e2e-joints', topic: '/joint_states', type: 'sensor_msgs/JointState' }));
   const first = Date.now();
   while (!last) {
-    if (Date.now() - first > 20_000) throw new Error('no /joint_states from the robot driver within 20 s');
+    if (Date.now() - first > 20_000) throw new Error(`no /joint_states of group ${groupName} (${joints.join(', ')}) from the robot driver within 20 s`);
     await new Promise((r) => setTimeout(r, 20));
   }
   const now = () => /** @type {{position: number[], velocity: number[]}} */ (last);
@@ -59,22 +91,28 @@ export async function watchRobot(url = process.env.E2E_ROSBRIDGE_URL || '') {
  * @property {() => void} close
  */
 
-/** The driver's state (20 Hz, /cell/manual/state), kept as TCP samples. @param {string} url @returns {Promise<TcpWatch>} */
-export async function watchTcp(url = process.env.E2E_ROSBRIDGE_URL || '') {
+/**
+ * A group's driver state (20 Hz, /cell/manual/<group>/state), kept as TCP samples.
+ * @param {string} [group] default: the cell's first group
+ * @param {string} [url]
+ * @returns {Promise<TcpWatch>}
+ */
+export async function watchTcp(group, url = process.env.E2E_ROSBRIDGE_URL || '') {
+  const topic = `/cell/manual/${groupOf(group).name}/state`;
   const ws = new WebSocket(url);
   /** @type {{ at: number, p: number[] }[]} */
   const samples = [];
   ws.on('message', (d) => {
     const m = JSON.parse(d.toString());
-    if (m.op !== 'publish' || m.topic !== '/cell/manual/state' || !Array.isArray(m.msg?.tcp_pose) || m.msg.tcp_pose.length < 6) return;
+    if (m.op !== 'publish' || m.topic !== topic || !Array.isArray(m.msg?.tcp_pose) || m.msg.tcp_pose.length < 6) return;
     samples.push({ at: Date.now(), p: m.msg.tcp_pose });
     if (samples.length > 20_000) samples.splice(0, 10_000);
   });
   await new Promise((resolve, reject) => { ws.once('open', resolve); ws.once('error', reject); });
-  ws.send(JSON.stringify({ op: 'subscribe', id: 'e2e-tcp', topic: '/cell/manual/state', type: 'cell_msgs/RobotState' }));
+  ws.send(JSON.stringify({ op: 'subscribe', id: 'e2e-tcp', topic, type: 'cell_msgs/RobotState' }));
   const first = Date.now();
   while (!samples.length) {
-    if (Date.now() - first > 20_000) throw new Error('no /cell/manual/state from the robot driver within 20 s');
+    if (Date.now() - first > 20_000) throw new Error(`no ${topic} from the robot driver within 20 s`);
     await new Promise((r) => setTimeout(r, 20));
   }
   return {

@@ -1,6 +1,5 @@
 // The BFF is the only door: an operator's forbidden rosbridge ops through /ros are refused with rosbridge
-// errors and never reach ROS; the admin pages' APIs are refused too. Runs on the phone profile only (see playwright.config.js), as an
-// operator on the shop floor would be.
+// errors and never reach ROS; the admin pages' APIs are refused too. Runs on every profile (see playwright.config.js).
 import { test, expect } from '@playwright/test';
 import { loginAs, sessionCookie, rosSocket } from '../lib/app.js';
 import { rosCli, publishMode } from '../lib/ros.js';
@@ -56,7 +55,7 @@ test('an admin may do what the operator may not; rosapi lists everything for the
   await publishMode('idle');
 });
 
-test('an operator on a phone cannot reach the admin pages or their APIs', async ({ page }) => {
+test('an operator cannot reach the admin pages or their APIs', async ({ page }) => {
   await loginAs(page, 'operator');
   for (const api of ['/api/system', '/api/audit']) expect((await page.request.get(api)).status(), api).toBe(403);
   await page.goto('/system');

@@ -219,9 +219,9 @@ describe('a running stack restarts what dies', { timeout: 300_000 }, () => {
     await new Promise((resolve, reject) => { watch.once('open', resolve); watch.once('error', reject); });
     watch.on('message', (d) => {
       const m = JSON.parse(d.toString());
-      if (m.op === 'publish' && m.topic === '/cell/manual/state') driverConnected.push(m.msg.connected);
+      if (m.op === 'publish' && m.topic === '/cell/manual/arm/state') driverConnected.push(m.msg.connected);
     });
-    watch.send(JSON.stringify({ op: 'subscribe', id: 'driver', topic: '/cell/manual/state', type: 'cell_msgs/RobotState', throttle_rate: 100 }));
+    watch.send(JSON.stringify({ op: 'subscribe', id: 'driver', topic: '/cell/manual/arm/state', type: 'cell_msgs/RobotState', throttle_rate: 100 }));
     assert.ok(await until(() => driverConnected.at(-1) === true, 20_000), 'the driver is connected to the sim');
     const seen = driverConnected.length;
     const from = stack.output().length;

@@ -132,3 +132,60 @@ test('modules: a role launches and stops only the modules whose roles list it, a
   assert.equal(call('operator', '/cell/modules/output', 'Vision').forward, true, 'reading output is not a command');
   assert.ok(audit.entries.some((e) => e.outcome === 'denied' && /Vision/.test(e.detail)));
 });
+
+/** The demo cell with two motion groups (as config/twin-arm-cell.yaml has): a tool on each. */
+function twoGroupCell() {
+  const joints = (p) => cell.manual.groups[0].joints.map((j) => `${p}_${j}`);
+  return {
+    ...cell,
+    manual: {
+      ...cell.manual,
+      groups: [{ name: 'left', joints: joints('left') }, { name: 'right', joints: joints('right') }],
+      tools: [{ ...cell.manual.tools[0], name: 'gripper' }, { ...cell.manual.tools[0], name: 'vacuum', group: 'right' }],
+    },
+    routines: { ...cell.routines, groups: undefined, tools: ['gripper', 'vacuum'] },
+    roles: { viewer: { pages: ['manual', 'routines'] }, teacher: { pages: ['routines'] } },
+  };
+}
+
+test('manual reads /joint_states and, per motion group of the cell file, its state and TCP pose (no cell-wide state topic)', () => {
+  const demo = grantsFor({ ...cell, roles: { r: { pages: ['manual'] } } }, FEATURES, 'r');
+  for (const t of ['/joint_states', '/cell/manual/arm/state', '/cell/manual/arm/tcp_pose']) assert.ok(demo.subscribe.includes(t), t);
+  assert.ok(!demo.subscribe.includes('/cell/manual/state'));
+  assert.ok(!demo.subscribe.includes('/cell/manual/tcp_pose'));
+
+  const c = twoGroupCell();
+  const g = grantsFor(c, FEATURES, 'viewer');
+  for (const t of ['/joint_states', '/cell/manual/left/state', '/cell/manual/left/tcp_pose', '/cell/manual/right/state', '/cell/manual/right/tcp_pose']) {
+    assert.ok(g.subscribe.includes(t), t);
+  }
+  assert.ok(!g.subscribe.some((t) => t === '/cell/manual/state' || t === '/cell/manual/arm/state'));
+  // Commands keep their names: one jog topic and one set of services for every group.
+  assert.deepEqual(namesOf(FEATURES.find((f) => f.id === 'manual'), 'motion', c).publish, ['/cell/manual/jog']);
+  assert.deepEqual(stopNames(c, FEATURES).call_service.filter((s) => s.startsWith('/cell/manual/')), ['/cell/manual/stop']);
+
+  // Through the op guard: a group's state is readable, a made-up group's is not.
+  const grants = new Map([['viewer', g]]);
+  const guard = createOpGuard({ grantsOf: (r) => grants.get(r), motion: motionNames(c, FEATURES), lease: new ControlLease(), audit: { record() {} }, checkArgs: argumentChecks(c, FEATURES) });
+  const cx = { session: { username: 'v', role: 'viewer', sid: 'v' }, ip: '127.0.0.1', rosapiCalls: new Map(), lastPublishAudit: new Map() };
+  const sub = (topic) => guard.inspect(cx, Buffer.from(JSON.stringify({ op: 'subscribe', id: 's', topic, type: 'cell_msgs/RobotState' })), false).forward;
+  assert.equal(sub('/cell/manual/right/state'), true);
+  assert.equal(sub('/cell/manual/middle/state'), false);
+  assert.equal(sub('/cell/manual/state'), false);
+});
+
+test('routines read the state of the groups they record for, and tell the page each tool\'s group', () => {
+  const c = twoGroupCell();
+  const g = grantsFor(c, FEATURES, 'teacher');
+  assert.ok(g.subscribe.includes('/cell/manual/left/state'));
+  assert.ok(g.subscribe.includes('/cell/manual/right/state'));
+  assert.ok(!g.subscribe.includes('/cell/manual/left/tcp_pose'), 'the TCP pose topic is the Manual page\'s');
+  const routines = FEATURES.find((f) => f.id === 'routines');
+  assert.deepEqual(routines.view(c.routines, 'teacher', c), { groups: ['left', 'right'], tools: ['gripper', 'vacuum'], tool_groups: { gripper: 'left', vacuum: 'right' } });
+  // A routines section that names its groups: only those.
+  const only = { ...c, routines: { ...c.routines, groups: ['right'] } };
+  const g2 = grantsFor(only, FEATURES, 'teacher');
+  assert.ok(g2.subscribe.includes('/cell/manual/right/state'));
+  assert.ok(!g2.subscribe.includes('/cell/manual/left/state'));
+  assert.deepEqual(routines.view(cell.routines, 'admin', cell).tool_groups, { gripper: 'arm' });
+});

@@ -7,7 +7,7 @@ import { startBff, login, tempDir } from '../helpers.js';
 import { LoginThrottle } from '../../src/core/auth/throttle.js';
 import { ControlLease } from '../../src/core/control/lease.js';
 import { AuditLog } from '../../src/core/audit/audit-log.js';
-import { readEnv } from '../../src/core/config/env.js';
+import { readEnv, REPO_ROOT } from '../../src/core/config/env.js';
 import { createBff, StartupError } from '../../src/app.js';
 
 let t;
@@ -172,4 +172,18 @@ test('security headers: CSP without unsafe-inline scripts, frame-ancestors none'
   assert.match(csp, /frame-ancestors 'none'/);
   assert.doesNotMatch(csp.match(/script-src[^;]*/)[0], /unsafe-inline/);
   assert.equal(r.headers.get('referrer-policy'), 'no-referrer');
+});
+
+test('a role none of whose commands moves the robot may not take control (the twin cell\'s maintenance)', async () => {
+  const s = await startBff({ CELL_CONFIG: path.join(REPO_ROOT, 'config/twin-arm-cell.yaml') });
+  try {
+    const maint = await login(s.base, 'maintenance', s.passwords.maintenance);
+    const refused = await fetch(`${s.base}/api/control/take`, { method: 'POST', headers: { cookie: maint.cookie, 'content-type': 'application/json' }, body: '{}' });
+    assert.equal(refused.status, 403);
+    assert.match((await refused.json()).error, /no command that moves the robot/);
+    const op = await login(s.base, 'operator', s.passwords.operator);
+    assert.equal((await fetch(`${s.base}/api/control/take`, { method: 'POST', headers: { cookie: op.cookie } })).status, 200, 'the operator runs the process');
+  } finally {
+    await s.stop();
+  }
 });

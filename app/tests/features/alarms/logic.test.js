@@ -7,13 +7,13 @@ const list = {
   alarms: [
     { id: 'force.limit', text: 'Force above 80 N', severity: 1, active: false, since: t(100), last_seen: t(120), source: 'force', count: 1 },
     { id: 'device.gripper_fault', text: 'Gripper fault', severity: 2, active: true, since: t(200), last_seen: t(210), source: 'device', count: 1 },
-    { id: 'robot.reduced', text: 'Reduced mode', severity: 1, active: true, since: t(300), last_seen: t(310), source: 'robot', count: 2 },
+    { id: 'robot.arm.reduced_mode', text: 'Robot arm: reduced mode', severity: 1, active: true, since: t(300), last_seen: t(310), source: 'robot', count: 2 },
   ],
 };
 
 describe('alarm list', () => {
   it('puts active first, then the most severe, then the newest', () => {
-    expect(alarmViews(list).map((a) => a.id)).toEqual(['device.gripper_fault', 'robot.reduced', 'force.limit']);
+    expect(alarmViews(list).map((a) => a.id)).toEqual(['device.gripper_fault', 'robot.arm.reduced_mode', 'force.limit']);
   });
   it('converts ROS times and leaves unset ones empty', () => {
     expect(rosTimeMs(t(2))).toBe(2000);
@@ -40,7 +40,7 @@ describe('banner and badge', () => {
     expect(sig.banner).toBeNull();
     sig.updateList(list);
     expect(sig.badge).toEqual({ count: 2, label: '2 active alarms' });
-    expect(sig.banner?.id).toBe('robot.reduced');
+    expect(sig.banner?.id).toBe('robot.arm.reduced_mode');
     sig.dismiss();
     expect(sig.banner).toBeNull();
     // A new alarm comes in: the banner is back, for it.

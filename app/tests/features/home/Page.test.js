@@ -7,6 +7,7 @@ import { ros } from '../../../src/lib/core/connection.svelte.js';
 import { opMode } from '../../../src/lib/core/opMode.svelte.js';
 import { lease } from '../../../src/lib/core/lease.svelte.js';
 import { lastKnown } from '../../../src/lib/core/lastKnown.js';
+import { makeFakeFactory, flush } from '../../fakeRos.js';
 
 const feature = { id: 'home', path: '/', title: 'Home', icon: '', load: async () => ({ default: HomePage }) };
 
@@ -80,5 +81,49 @@ describe('Home page', () => {
     render(HomePage, { feature });
     await new Promise((r) => setTimeout(r, 20));
     expect(screen.getByTestId('home-mode').textContent).toBe('—');
+  });
+});
+
+describe('Home page: the robot of each motion group', () => {
+  /** @type {ReturnType<typeof makeFakeFactory>} */
+  let f;
+  const JOINTS = ['shoulder_pan_joint'];
+  /** @param {string[]} groups */
+  async function openWith(groups) {
+    ros.stop();
+    f = makeFakeFactory();
+    ros.factory = f.factory;
+    ros.url = () => 'ws://test/ros';
+    session.config = /** @type {any} */ ({
+      cell: { id: 'c', name: 'Cell' }, role: 'admin', pages: [{ id: 'home', title: 'Home' }, { id: 'manual', title: 'Manual motion' }],
+      operation_mode: { topic: '/cell/mode', type: 't', modes: [] },
+      features: { manual: { groups: groups.map((name) => ({ name, joints: JOINTS })) } },
+    });
+    render(HomePage, { feature });
+    ros.start();
+    await flush();
+    f.rosList.at(-1)?.emit('connection');
+    flushSync();
+  }
+  afterEach(() => ros.stop());
+
+  it('one group: one "Robot" card on its state topic', async () => {
+    await openWith(['arm']);
+    const cards = screen.getAllByTestId('home-robot');
+    expect(cards.map((c) => c.querySelector('h2')?.textContent)).toEqual(['Robot']);
+    expect(f.topicsNamed('/cell/manual/arm/state').map((t) => t.options?.throttle_rate)).toEqual([500]);
+    expect(f.topicsNamed('/cell/manual/state')).toEqual([]);
+  });
+
+  it('two groups: a card per group, each on its own state topic', async () => {
+    await openWith(['left', 'right']);
+    const cards = screen.getAllByTestId('home-robot');
+    expect(cards.map((c) => c.querySelector('h2')?.textContent)).toEqual(['Robot left', 'Robot right']);
+    for (const t of f.topicsNamed('/cell/manual/right/state')) t.deliver({ connected: true, controller: '127.0.2.2', robot_mode: 'RUNNING', safety_mode: 'PROTECTIVE_STOP' });
+    flushSync();
+    const right = cards[1];
+    expect(right.textContent).toContain('connected to 127.0.2.2');
+    expect(right.textContent).toContain('Protective stop');
+    expect(cards[0].textContent).toContain('no state from the robot driver yet');
   });
 });

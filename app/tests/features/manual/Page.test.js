@@ -18,6 +18,11 @@ const GROUPS = {
   tools: [{ name: 'gripper', actions: ['open', 'close'] }],
   limits: { default_speed: 0.25, default_acceleration: 0.5, max_speed: 1, max_acceleration: 1.5, max_tcp_speed: 0.25, max_tcp_acceleration: 1.2, jog_timeout: 0.2 },
 };
+/** The cell file's manual section as /api/config gives it (features.manual). */
+const SECTION = {
+  groups: [{ name: 'arm', joints: JOINTS, configurations: { home: [0, -1.5708, 1.5708, -1.5708, -1.5708, 0], pick_approach: [0.4, -1.2, 1.6, -1.97, -1.5708, 0.4] } }],
+  tools: [{ name: 'gripper', actions: [{ name: 'open', steps: [{ digital_out: 0, value: false }] }, { name: 'close', steps: [{ digital_out: 0, value: true }] }] }],
+};
 const STATE = {
   connected: true, controller: '127.0.0.1', robot_mode: 'RUNNING', safety_mode: 'NORMAL', speed_scaling: 1, program_running: true,
   motion: 'idle', motion_group: '', motion_target: '', progress: 1, message: 'ready',
@@ -27,7 +32,7 @@ const STATE = {
 /** @type {ReturnType<typeof makeFakeFactory>} */
 let f;
 
-/** @param {{ you?: boolean, role?: string, commands?: string[] }} [o] */
+/** @param {{ you?: boolean, role?: string, commands?: string[], manual?: any }} [o] */
 function signIn(o = {}) {
   const role = o.role ?? 'admin';
   session.user = { username: role, role };
@@ -35,7 +40,7 @@ function signIn(o = {}) {
     cell: { id: 'c', name: 'Demo' }, role, pages: [{ id: 'manual', title: 'Manual motion' }],
     operation_mode: { topic: '/cell/mode', type: 't', modes: [] },
     commands: o.commands ?? (role === 'admin' ? ['manual'] : ['process']),
-    features: { video: { streams: [{ name: 'Workbench', topic: '/cell/camera/workbench/image/compressed' }] } },
+    features: { manual: o.manual ?? SECTION, video: { streams: [{ name: 'Workbench', topic: '/cell/camera/workbench/image/compressed' }] } },
   });
   const view = o.you ? { holder: { username: role, role }, you: true } : { holder: null, you: false };
   vi.stubGlobal('fetch', vi.fn(async () => new Response(JSON.stringify(view), { status: 200 })));
@@ -58,9 +63,9 @@ async function answerGroups(resp = GROUPS) {
   flushSync();
 }
 
-/** @param {any} [patch] */
-function sendState(patch = {}) {
-  for (const t of f.topicsNamed('/cell/manual/state')) t.deliver({ ...STATE, ...patch });
+/** Deliver a RobotState on a group's state topic (the demo's one group: arm). @param {any} [patch] @param {string} [group] */
+function sendState(patch = {}, group = 'arm') {
+  for (const t of f.topicsNamed(`/cell/manual/${group}/state`).filter((x) => !x.unsubscribed)) t.deliver({ ...STATE, motion_group: group, ...patch });
   flushSync();
 }
 
@@ -83,6 +88,7 @@ beforeEach(async () => {
   ros.factory = f.factory;
   ros.url = () => 'ws://test/ros';
   session.offline = false;
+  sessionStorage.clear();
   await lastKnown.clear();
 });
 
@@ -108,8 +114,11 @@ describe('Manual motion page', () => {
     await answerGroups();
     sendState();
 
-    const group = /** @type {HTMLSelectElement} */ (screen.getByRole('combobox', { name: 'Motion group' }));
-    expect([...group.options].map((o) => o.value)).toEqual(['arm']);
+    // One motion group: no group choice at all, and the state of that group's topic.
+    expect(screen.queryByRole('radiogroup', { name: 'Motion group' })).toBeNull();
+    expect(screen.queryByRole('combobox', { name: 'Motion group' })).toBeNull();
+    expect(f.topicsNamed('/cell/manual/arm/state').map((t) => t.type)).toEqual(['cell_msgs/RobotState']);
+    expect(f.topicsNamed('/cell/manual/state')).toEqual([]);
     const named = /** @type {HTMLSelectElement} */ (screen.getByRole('combobox', { name: 'Named configuration' }));
     expect([...named.options].map((o) => o.value)).toEqual(['home', 'pick_approach']);
     for (const n of ['Jog joint 1 +', 'Jog joint 6 -', 'Move to configuration', 'Move relative', 'Move to pose', 'Gripper open', 'Gripper close']) {
@@ -354,7 +363,7 @@ describe('Manual motion page', () => {
 
   it('keeps the last state in IndexedDB and shows it, stale, on a later visit without ROS', async () => {
     await openAsHolder();
-    await vi.waitFor(async () => expect((await lastKnown.load('manual', { user: 'admin' }))?.data.state.tcp_pose[0]).toBe(0.4));
+    await vi.waitFor(async () => expect((await lastKnown.load('manual/arm', { user: 'admin' }))?.data.state.tcp_pose[0]).toBe(0.4));
     screen.getByTestId('manual-status'); // rendered
     ros.stop();
     document.body.innerHTML = '';
@@ -382,5 +391,165 @@ describe('Manual motion page', () => {
     cleanup();
     vi.runOnlyPendingTimers();
     expect(cam[0].unsubscribed).toBe(true);
+  });
+});
+
+// ---- a cell with two motion groups (as config/twin-arm-cell.yaml): one UR arm each, a tool on each ----
+const prefixed = (/** @type {string} */ p) => JOINTS.map((j) => `${p}_${j}`);
+const TWIN_GROUPS = {
+  groups: [
+    { name: 'left', joints: prefixed('left'), configurations: [{ name: 'home', positions: [0, -1.5708, 1.5708, -1.5708, -1.5708, 0] }, { name: 'handover', positions: [0.8, -1.2, 1.6, -1.97, -1.5708, 0] }] },
+    { name: 'right', joints: prefixed('right'), configurations: [{ name: 'home', positions: [0, -1.5708, 1.5708, -1.5708, -1.5708, 0] }, { name: 'place', positions: [-0.6, -1.2, 1.6, -1.97, -1.5708, 0] }] },
+  ],
+  // The lamp has no group in the answer (an older driver): it belongs to the first group.
+  tools: [{ name: 'gripper', actions: ['open', 'close'], group: 'left' }, { name: 'vacuum', actions: ['suction_on', 'suction_off'], group: 'right' }, { name: 'lamp', actions: ['on'] }],
+  limits: GROUPS.limits,
+};
+const TWIN_SECTION = {
+  groups: TWIN_GROUPS.groups.map((g) => ({ name: g.name, joints: g.joints, configurations: Object.fromEntries(g.configurations.map((c) => [c.name, c.positions])) })),
+  tools: [{ name: 'gripper', actions: [] }, { name: 'vacuum', group: 'right', actions: [] }, { name: 'lamp', actions: [] }],
+};
+
+/** @param {{ you?: boolean, role?: string }} [o] */
+async function openTwin(o = {}) {
+  signIn({ ...o, manual: TWIN_SECTION });
+  const r = render(ManualPage, { feature });
+  await connect();
+  await answerGroups(TWIN_GROUPS);
+  sendState({}, 'left');
+  return r;
+}
+
+const groupRadio = (/** @type {string} */ name) => /** @type {HTMLInputElement} */ (screen.getByRole('radio', { name }));
+const liveTopics = (/** @type {string} */ name) => f.topicsNamed(name).filter((t) => !t.unsubscribed);
+/** Unmount (or clean up) now and run the page's delayed unadvertise, as a page change would. @param {() => void} fn */
+function leave(fn) {
+  vi.useFakeTimers({ toFake: ['setTimeout', 'clearTimeout'] });
+  fn();
+  vi.runOnlyPendingTimers();
+  vi.useRealTimers();
+}
+const configOptions = () => [.../** @type {HTMLSelectElement} */ (screen.getByRole('combobox', { name: 'Named configuration' })).options].map((o) => o.value);
+
+describe('Manual motion page with two motion groups', () => {
+  it('the group comes first: a "Motion group" radio group, one option per group, the first chosen; the page is for it', async () => {
+    await openTwin();
+    const chooser = screen.getByRole('radiogroup', { name: 'Motion group' });
+    expect(within(chooser).getAllByRole('radio').map((r) => r.getAttribute('value'))).toEqual(['left', 'right']);
+    expect(groupRadio('left').checked).toBe(true);
+    expect(groupRadio('right').checked).toBe(false);
+    // Its state only, its configurations, its tools (the lamp has no group: the first group's).
+    expect(liveTopics('/cell/manual/left/state').length).toBe(1);
+    expect(f.topicsNamed('/cell/manual/right/state')).toEqual([]);
+    expect(configOptions()).toEqual(['home', 'handover']);
+    for (const n of ['Gripper open', 'Gripper close', 'Lamp on']) expect(button(n)).toBeTruthy();
+    expect(screen.queryByRole('button', { name: 'Vacuum suction on' })).toBeNull();
+    expect(screen.getByTestId('manual-status-group').textContent).toBe('left');
+    // Joint names carry the group prefix; the page shows the UR joint.
+    expect(screen.getByTestId('manual-pose').querySelector('[title="shoulder pan"]')).toBeTruthy();
+    // The chooser sits before the status strip (chosen first, then everything for it).
+    expect(chooser.compareDocumentPosition(screen.getByTestId('manual-status')) & Node.DOCUMENT_POSITION_FOLLOWING).toBeTruthy();
+  });
+
+  it('choosing another group re-subscribes to its state and shows its pose, configurations and tools', async () => {
+    await openTwin();
+    expect(screen.getByTestId('pose-x').textContent).toBe('400.0');
+    await fireEvent.click(groupRadio('right'));
+    flushSync();
+    expect(groupRadio('right').checked).toBe(true);
+    expect(f.topicsNamed('/cell/manual/left/state').every((t) => t.unsubscribed)).toBe(true);
+    expect(liveTopics('/cell/manual/right/state').map((t) => t.type)).toEqual(['cell_msgs/RobotState']);
+    // Nothing of the left arm is shown as the right one's.
+    expect(screen.getByTestId('pose-x').textContent).toBe('—');
+    sendState({ tcp_pose: [-0.3, 0.2, 0.25, 0, 3.1416, 0], controller: '127.0.2.2' }, 'right');
+    expect(screen.getByTestId('pose-x').textContent).toBe('-300.0');
+    expect(screen.getByTestId('manual-controller').textContent).toBe('connected to 127.0.2.2');
+    expect(screen.getByTestId('manual-status-group').textContent).toBe('right');
+    expect(configOptions()).toEqual(['home', 'place']);
+    for (const n of ['Vacuum suction on', 'Vacuum suction off']) expect(button(n)).toBeTruthy();
+    for (const n of ['Gripper open', 'Lamp on']) expect(screen.queryByRole('button', { name: n })).toBeNull();
+    // Back to left: its subscription again.
+    await fireEvent.click(groupRadio('left'));
+    flushSync();
+    expect(liveTopics('/cell/manual/left/state').length).toBe(1);
+    expect(f.topicsNamed('/cell/manual/right/state').every((t) => t.unsubscribed)).toBe(true);
+  });
+
+  it('jog, moves and tool actions go with the chosen group', async () => {
+    await openTwin({ you: true });
+    await fireEvent.click(groupRadio('right'));
+    sendState({}, 'right');
+    await fireEvent.pointerDown(button('Jog joint 2 +'), { pointerId: 1, button: 0, pointerType: 'touch' });
+    await fireEvent.pointerUp(button('Jog joint 2 +'), { pointerId: 1 });
+    expect(jogSent().map((m) => [m.group, m.axis, m.direction])).toEqual([['right', 1, 1], ['right', 1, 0]]);
+    await fireEvent.change(screen.getByRole('combobox', { name: 'Named configuration' }), { target: { value: 'place' } });
+    await fireEvent.click(button('Move to configuration'));
+    expect(f.calls.find((c) => c.name === '/cell/manual/move_named')?.args).toMatchObject({ group: 'right', name: 'place' });
+    f.calls.find((c) => c.name === '/cell/manual/move_named')?.ok({ success: true, message: 'arrived at place' });
+    await vi.waitFor(() => expect(button('Move to configuration').disabled).toBe(false));
+    await fireEvent.click(button('Vacuum suction on'));
+    expect(f.calls.find((c) => c.name === '/cell/manual/tool')?.args).toEqual({ tool: 'vacuum', action: 'suction_on' });
+  });
+
+  it('switching the group while jogging stops the jog first (the stop goes to the jogging arm), and nothing follows', async () => {
+    await openTwin({ you: true });
+    vi.useFakeTimers({ toFake: ['setInterval', 'clearInterval'] });
+    await fireEvent.pointerDown(button('Jog joint 1 +'), { pointerId: 1, button: 0, pointerType: 'touch' });
+    vi.advanceTimersByTime(50);
+    await fireEvent.click(groupRadio('right'));
+    flushSync();
+    vi.advanceTimersByTime(500);
+    expect(jogSent().map((m) => [m.group, m.direction])).toEqual([['left', 1], ['left', 1], ['left', 0]]);
+    expect(button('Jog joint 1 +').getAttribute('aria-pressed')).toBe('false');
+  });
+
+  it('"Stop move" is one call that stops every arm, whichever group is shown', async () => {
+    await openTwin();
+    await fireEvent.click(groupRadio('right'));
+    await fireEvent.click(button('Stop move'));
+    const stops = f.calls.filter((c) => c.name === '/cell/manual/stop');
+    expect(stops.map((c) => [c.type, c.args])).toEqual([['std_srvs/Trigger', {}]]);
+  });
+
+  it('the choice is remembered for the session (another visit, a reload); an unknown one falls back to the first group', async () => {
+    const { unmount } = await openTwin();
+    await fireEvent.click(groupRadio('right'));
+    expect(sessionStorage.getItem('cell-ui.manual.group')).toBe('right');
+    leave(unmount);
+    render(ManualPage, { feature });
+    await answerGroups(TWIN_GROUPS);
+    expect(groupRadio('right').checked).toBe(true);
+    expect(liveTopics('/cell/manual/right/state').length).toBe(1);
+    expect(liveTopics('/cell/manual/left/state')).toEqual([]);
+    leave(cleanup);
+    sessionStorage.setItem('cell-ui.manual.group', 'middle');
+    render(ManualPage, { feature });
+    expect(groupRadio('left').checked).toBe(true);
+  });
+
+  it('before the driver answers, the groups come from the cell file: the choice and the state are there at once', async () => {
+    signIn({ manual: TWIN_SECTION });
+    render(ManualPage, { feature });
+    await connect();
+    expect(within(screen.getByRole('radiogroup', { name: 'Motion group' })).getAllByRole('radio').length).toBe(2);
+    expect(liveTopics('/cell/manual/left/state').length).toBe(1);
+    sendState({}, 'left');
+    expect(screen.getByTestId('pose-x').textContent).toBe('400.0');
+    expect(screen.getByTestId('manual-setup').textContent).toMatch(/Asking the robot driver/);
+  });
+
+  it('each group keeps its own last known state', async () => {
+    await openTwin();
+    await vi.waitFor(async () => expect((await lastKnown.load('manual/left', { user: 'admin' }))?.data.state.tcp_pose[0]).toBe(0.4));
+    await fireEvent.click(groupRadio('right'));
+    sendState({ tcp_pose: [-0.3, 0.2, 0.25, 0, 3.1416, 0] }, 'right');
+    f.rosList.at(-1)?.emit('close');
+    flushSync();
+    await vi.waitFor(async () => expect((await lastKnown.load('manual/right', { user: 'admin' }))?.data.state.tcp_pose[0]).toBe(-0.3));
+    expect((await lastKnown.load('manual/left', { user: 'admin' }))?.data.state.tcp_pose[0]).toBe(0.4);
+    // Offline, the other group shows its own last state, stale.
+    await fireEvent.click(groupRadio('left'));
+    await vi.waitFor(() => expect(screen.getByTestId('pose-x').textContent).toBe('400.0'));
+    expect(screen.getByTestId('manual-pose-freshness').dataset.stale).toBe('true');
   });
 });

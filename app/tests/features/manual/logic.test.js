@@ -4,7 +4,8 @@ import {
   mmToM, mToMm, degToRad, radToDeg, parseNumber, fixed, normalizeLimits, normalizeSetup, humanize, toolLabel, jogLabel,
   jogRows, jointShortName, defaultFraction, jogRates, moveRates, jogCommand, namedRequest, relativeRequest, poseRequest,
   poseToForm, poseRows, jointRows, modeText, robotModeTone, safetyTone, pickState, statusView, manualGate, notLiveBecause,
-  JogHold, JOG_PERIOD_MS, MAX_MANUAL_TCP_SPEED, VIEW_ONLY_REASON,
+  JogHold, JOG_PERIOD_MS, MAX_MANUAL_TCP_SPEED, VIEW_ONLY_REASON, stateTopic, STATE_TYPE, sectionGroups, groupChoices,
+  chosenGroup, toolsOfGroup,
 } from '../../../src/lib/features/manual/logic.js';
 
 const LIMITS = normalizeLimits({
@@ -56,11 +57,12 @@ describe("the driver's groups, tools and limits", () => {
         { name: 'arm', joints: ['shoulder_pan_joint', 7], configurations: [{ name: 'home', positions: [0, -1.57] }, { positions: [1] }] },
         { joints: ['x'] },
       ],
-      tools: [{ name: 'gripper', actions: ['open', 'close'] }, { name: '' }],
+      tools: [{ name: 'gripper', actions: ['open', 'close'] }, { name: '' }, { name: 'vacuum', actions: ['on'], group: 'right' }],
       limits: { max_speed: 1 },
     });
     expect(s.groups).toEqual([{ name: 'arm', joints: ['shoulder_pan_joint'], configurations: [{ name: 'home', positions: [0, -1.57] }] }]);
-    expect(s.tools).toEqual([{ name: 'gripper', actions: ['open', 'close'] }]);
+    // ToolInfo.group: '' when the driver does not say (the first group's).
+    expect(s.tools).toEqual([{ name: 'gripper', actions: ['open', 'close'], group: '' }, { name: 'vacuum', actions: ['on'], group: 'right' }]);
     expect(s.limits.maxSpeed).toBe(1);
     expect(normalizeSetup(undefined)).toMatchObject({ groups: [], tools: [] });
   });
@@ -85,6 +87,59 @@ describe('names', () => {
     ]);
     expect(jogRows('cartesian', joints).map((r) => r.name)).toEqual(['X', 'Y', 'Z', 'RX', 'RY', 'RZ']);
     expect(jointShortName('wrist_1_joint')).toBe('wrist 1');
+    // A cell with several arms prefixes its joint names: the pad shows the UR joint the name ends with.
+    expect(jointShortName('left_shoulder_pan_joint')).toBe('shoulder pan');
+    expect(jointShortName('right_wrist_3_joint')).toBe('wrist 3');
+    expect(jointShortName('gantry_x_joint')).toBe('gantry x');
+  });
+});
+
+describe('motion groups', () => {
+  const twin = {
+    groups: [
+      { name: 'left', joints: ['left_shoulder_pan_joint'], configurations: { home: [0, 1], handover: [2, 3] }, host: '127.0.2.1' },
+      { name: 'right', joints: ['right_shoulder_pan_joint'] },
+    ],
+    tools: [{ name: 'gripper', actions: [] }, { name: 'vacuum', group: 'right', actions: [] }],
+  };
+
+  it('each group has its own state topic', () => {
+    expect(stateTopic('arm')).toBe('/cell/manual/arm/state');
+    expect(stateTopic('left')).toBe('/cell/manual/left/state');
+    expect(STATE_TYPE).toBe('cell_msgs/RobotState');
+  });
+
+  it('reads the groups of the cell file\'s section as the driver describes them', () => {
+    expect(sectionGroups(twin)).toEqual([
+      { name: 'left', joints: ['left_shoulder_pan_joint'], configurations: [{ name: 'home', positions: [0, 1] }, { name: 'handover', positions: [2, 3] }] },
+      { name: 'right', joints: ['right_shoulder_pan_joint'], configurations: [] },
+    ]);
+    expect(sectionGroups(null)).toEqual([]);
+    expect(sectionGroups({ groups: [{ joints: [] }] })).toEqual([]);
+  });
+
+  it('offers the driver\'s groups once it answered, the cell file\'s before; the remembered one while it exists', () => {
+    const fromCell = sectionGroups(twin);
+    expect(groupChoices(null, fromCell)).toEqual(['left', 'right']);
+    const setup = normalizeSetup({ groups: [{ name: 'arm', joints: ['a'] }] });
+    expect(groupChoices(setup, fromCell)).toEqual(['arm']);
+    expect(groupChoices(normalizeSetup({}), fromCell)).toEqual(['left', 'right']);
+    expect(chosenGroup(['left', 'right'], 'right')).toBe('right');
+    expect(chosenGroup(['left', 'right'], 'middle')).toBe('left');
+    expect(chosenGroup(['left', 'right'], '')).toBe('left');
+    expect(chosenGroup([], 'right')).toBe('');
+  });
+
+  it('a tool belongs to the group the driver says, else the cell file says, else the first group', () => {
+    const tools = [
+      { name: 'gripper', actions: ['open'], group: 'left' },
+      { name: 'vacuum', actions: ['on'], group: '' },
+      { name: 'lamp', actions: ['on'], group: '' },
+    ];
+    expect(toolsOfGroup(tools, 'left', 'left', twin).map((t) => t.name)).toEqual(['gripper', 'lamp']);
+    expect(toolsOfGroup(tools, 'right', 'left', twin).map((t) => t.name)).toEqual(['vacuum']);
+    expect(toolsOfGroup(tools, 'right', 'left').map((t) => t.name)).toEqual([]);
+    expect(toolsOfGroup([{ name: 'gripper', actions: [], group: '' }], 'arm', 'arm').map((t) => t.name)).toEqual(['gripper']);
   });
 });
 

@@ -1,6 +1,6 @@
 import { describe, it, expect } from 'vitest';
 import {
-  processView, controls, needsStartConfirmation, cycleText, fieldAt, formatValue, parseCycles, formatSeconds,
+  processView, controls, needsStartConfirmation, cycleText, fieldAt, formatValue, parseCycles, formatSeconds, startQuestion,
 } from '../../../src/lib/features/process/logic.js';
 
 const msg = (o = {}) => ({
@@ -52,6 +52,13 @@ describe('process view and controls', () => {
     expect(needsStartConfirmation(processView(msg({ at_start: false })))).toBe(true);
     expect(needsStartConfirmation(processView(msg({ at_start: true })))).toBe(false);
     expect(needsStartConfirmation(processView(msg({ at_start: false, start_configuration: '' })))).toBe(false);
+  });
+
+  it('asks in words for one group or several (a start configuration per group)', () => {
+    expect(startQuestion('home')).toBe('The robot is not at home. The first move goes there from where the arm is now. Start anyway?');
+    expect(startQuestion('')).toMatch(/^The robot is not at its start configuration\./);
+    expect(startQuestion('left: home, right: home')).toBe(
+      'The robots are not all at their start configurations (left: home, right: home). The first moves go there from where the arms are now. Start anyway?');
   });
 
   it('cycle text, seconds and the cycles input', () => {

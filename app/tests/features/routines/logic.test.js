@@ -1,6 +1,7 @@
 import { describe, it, expect } from 'vitest';
 import {
   normalizeStep, stepText, removeStep, moveStep, nameProblem, routineView, routineSummary, runView, toolChoices, poseText,
+  toolsOfGroup, robotTopic, ROBOT_TYPE,
 } from '../../../src/lib/features/routines/logic.js';
 
 const pose = normalizeStep({ kind: 'pose', pose: [0.4123, -0.12, 0.2305, 0, 3.14, 0], joints: [0, 1, 2, 3, 4, 5] });
@@ -51,5 +52,21 @@ describe('saved routines and the run', () => {
   it('shows the live pose in mm and rad', () => {
     expect(poseText([0.1, 0.2, 0.3, 0, 3.14159, 0])).toBe('x 100.0  y 200.0  z 300.0 mm · rx 0.000  ry 3.142  rz 0.000 rad');
     expect(poseText(undefined)).toBe('–');
+  });
+});
+
+describe('motion groups', () => {
+  it('each group has its own driver state topic', () => {
+    expect(robotTopic('left')).toBe('/cell/manual/left/state');
+    expect(ROBOT_TYPE).toBe('cell_msgs/RobotState');
+  });
+  it('offers only the chosen group\'s tools: the section\'s tool_groups, else the driver\'s ToolInfo.group, else the first group', () => {
+    const choices = [{ name: 'gripper', actions: ['open'] }, { name: 'vacuum', actions: ['on'] }, { name: 'lamp', actions: [] }];
+    const toolGroups = { gripper: 'left', vacuum: 'right' };
+    const groupsAnswer = { groups: [{ name: 'left' }, { name: 'right' }], tools: [{ name: 'lamp', group: 'right' }] };
+    expect(toolsOfGroup(choices, 'left', { toolGroups, groupsAnswer }).map((t) => t.name)).toEqual(['gripper']);
+    expect(toolsOfGroup(choices, 'right', { toolGroups, groupsAnswer }).map((t) => t.name)).toEqual(['vacuum', 'lamp']);
+    expect(toolsOfGroup(choices, 'left', { firstGroup: 'left' }).map((t) => t.name)).toEqual(['gripper', 'vacuum', 'lamp']);
+    expect(toolsOfGroup(choices, 'left', { groupsAnswer: { groups: [{ name: 'left' }], tools: [] } }).length).toBe(3);
   });
 });

@@ -2,12 +2,17 @@
 import { Router } from 'express';
 import { requireSession } from '../http/guards.js';
 
-/** @param {{lease: import('./lease.js').ControlLease, cell: import('../config/cell-types.js').Cell}} deps */
-export function controlRoutes({ lease, cell }) {
+/**
+ * @param {{lease: import('./lease.js').ControlLease, cell: import('../config/cell-types.js').Cell,
+ *   mayControl: (role: string) => boolean}} deps  mayControl: the role sends some command that needs the lease (a
+ *   role that never moves the robot must not hold control: it would only keep the others from moving it)
+ */
+export function controlRoutes({ lease, cell, mayControl }) {
   const r = Router();
   const view = (req) => ({ holder: lease.describe(), you: lease.isHolder(req.session) });
   r.get('/api/control', requireSession, (req, res) => res.json(view(req)));
   r.post('/api/control/take', requireSession, (req, res) => {
+    if (!mayControl(req.session.role)) return res.status(403).json({ error: `role "${req.session.role}" sends no command that moves the robot` });
     const out = lease.take(req.session, { force: req.body?.force === true, mayTakeOver: cell.roles[req.session.role]?.take_over === true });
     if (out.ok === false) return res.status(409).json({ error: out.reason, holder: { username: out.holder.username, role: out.holder.role } });
     res.json(view(req));

@@ -4,13 +4,25 @@ import { defineFeature, featureSchema } from '../../core/features/feature.js';
 
 const MOVES = ['/cell/manual/move_named', '/cell/manual/move_relative', '/cell/manual/move_pose', '/cell/manual/tool'];
 
+/** The motion groups of the manual section, in order. @param {any} section @returns {string[]} */
+export function groupNames(section) {
+  return (Array.isArray(section?.groups) ? section.groups : [])
+    .map((/** @type {{ name?: unknown }} */ g) => g?.name)
+    .filter((/** @type {unknown} */ n) => typeof n === 'string' && n !== '');
+}
+
+/** Each group's driver state and TCP pose topics: /cell/manual/<group>/state, /cell/manual/<group>/tcp_pose. */
+export const stateTopic = (/** @type {string} */ group) => `/cell/manual/${group}/state`;
+export const tcpPoseTopic = (/** @type {string} */ group) => `/cell/manual/${group}/tcp_pose`;
+
 export default defineFeature({
   id: 'manual',
   title: 'Manual motion',
   schema: featureSchema('manual'),
   view: (section) => section,
-  reads: () => ({
-    subscribe: ['/joint_states', '/cell/manual/state', '/cell/manual/tcp_pose'],
+  // Every arm publishes its own joints on /joint_states (the cell file's joint names) and each group its own state.
+  reads: (section) => ({
+    subscribe: ['/joint_states', ...groupNames(section).flatMap((g) => [stateTopic(g), tcpPoseTopic(g)])],
     call_service: ['/cell/manual/groups', '/cell/manual/get_pose'],
   }),
   commands: () => ({ publish: ['/cell/manual/jog'], call_service: MOVES }),

@@ -97,32 +97,32 @@ def test_a_device_stamp_is_the_first_seen_time_but_never_in_the_future() -> None
 
 # ---------------------------------------------------------------------------------------------- sources
 @pytest.mark.parametrize("state, alarm_id, severity", [
-    (robot(safety="PROTECTIVE_STOP"), "robot.protective_stop", ERROR),
-    (robot(safety="SYSTEM_EMERGENCY_STOP"), "robot.emergency_stop", ERROR),
-    (robot(safety="ROBOT_EMERGENCY_STOP"), "robot.emergency_stop", ERROR),
-    (robot(safety="SAFEGUARD_STOP"), "robot.safeguard_stop", ERROR),
-    (robot(safety="REDUCED"), "robot.reduced_mode", WARNING),
-    (robot(safety="VIOLATION"), "robot.safety_violation", ERROR),
-    (robot(safety="FAULT"), "robot.safety_fault", ERROR),
-    (robot(safety="UNDEFINED_SAFETY_MODE"), "robot.safety_mode", WARNING),
-    (robot(mode="POWER_OFF"), "robot.power_off", INFO),
-    (robot(connected=False, safety="", mode="NO_CONTROLLER"), "robot.disconnected", ERROR),
+    (robot(safety="PROTECTIVE_STOP"), "robot.arm.protective_stop", ERROR),
+    (robot(safety="SYSTEM_EMERGENCY_STOP"), "robot.arm.emergency_stop", ERROR),
+    (robot(safety="ROBOT_EMERGENCY_STOP"), "robot.arm.emergency_stop", ERROR),
+    (robot(safety="SAFEGUARD_STOP"), "robot.arm.safeguard_stop", ERROR),
+    (robot(safety="REDUCED"), "robot.arm.reduced_mode", WARNING),
+    (robot(safety="VIOLATION"), "robot.arm.safety_violation", ERROR),
+    (robot(safety="FAULT"), "robot.arm.safety_fault", ERROR),
+    (robot(safety="UNDEFINED_SAFETY_MODE"), "robot.arm.safety_mode", WARNING),
+    (robot(mode="POWER_OFF"), "robot.arm.power_off", INFO),
+    (robot(connected=False, safety="", mode="NO_CONTROLLER"), "robot.arm.disconnected", ERROR),
 ])
 def test_robot_state_becomes_alarms(state: dict, alarm_id: str, severity: int) -> None:
     a = make(now=0.0)
-    assert not a.on_robot_state(robot(), 0.5)
-    assert a.on_robot_state(state, 1.0)
+    assert not a.on_robot_state("arm", robot(), 0.5)
+    assert a.on_robot_state("arm", state, 1.0)
     (alarm,) = a.alarms()
     assert (alarm.id, alarm.severity, alarm.active, alarm.source) == (alarm_id, severity, True, "robot")
-    assert a.on_robot_state(robot(), 2.0)
+    assert a.on_robot_state("arm", robot(), 2.0)
     assert listed(a) == {alarm_id: False}
 
 
 def test_robot_normal_running_is_no_alarm_and_disconnected_names_the_host() -> None:
     a = make(now=0.0)
-    assert not a.on_robot_state(robot(), 1.0) and a.alarms() == []
-    a.on_robot_state(robot(connected=False, safety="", mode="NO_CONTROLLER", host="10.0.0.5"), 2.0)
-    assert a.alarms()[0].text == "robot controller at 10.0.0.5 is unreachable"
+    assert not a.on_robot_state("arm", robot(), 1.0) and a.alarms() == []
+    a.on_robot_state("arm", robot(connected=False, safety="", mode="NO_CONTROLLER", host="10.0.0.5"), 2.0)
+    assert a.alarms()[0].text == "Robot arm: robot controller at 10.0.0.5 is unreachable"
     st = a.status()
     assert (st.controller_connected, st.safety_mode, st.status) == (False, "", "fault")
 
@@ -187,75 +187,76 @@ def test_incomplete_modules_become_warnings_from_dicts_or_objects() -> None:
 
 
 def test_severity_overrides_exact_ids_win_over_globs() -> None:
-    a = make(severity={"module.*": "error", "robot.*": "warning", "robot.emergency_stop": "error"})
+    a = make(severity={"module.*": "error", "robot.*": "warning", "robot.arm.emergency_stop": "error"})
     a.on_modules([{"name": "vision", "state": "incomplete"}], 1.0)
-    a.on_robot_state(robot(safety="PROTECTIVE_STOP"), 1.0)
+    a.on_robot_state("arm", robot(safety="PROTECTIVE_STOP"), 1.0)
     assert a.table.get("module.vision").severity == ERROR
-    assert a.table.get("robot.protective_stop").severity == WARNING
-    a.on_robot_state(robot(safety="ROBOT_EMERGENCY_STOP"), 2.0)
-    assert a.table.get("robot.emergency_stop").severity == ERROR
+    assert a.table.get("robot.arm.protective_stop").severity == WARNING
+    a.on_robot_state("arm", robot(safety="ROBOT_EMERGENCY_STOP"), 2.0)
+    assert a.table.get("robot.arm.emergency_stop").severity == ERROR
 
 
 def test_silent_robot_driver_and_wrench_raise_alarms_and_clear_when_back() -> None:
     a = make(timeout_s=2)
     assert not a.tick(50.0)                                   # never heard: the source may not exist
-    a.on_robot_state(robot(safety="REDUCED"), 100.0)
+    a.on_robot_state("arm", robot(safety="REDUCED"), 100.0)
     a.on_wrench(WRENCH, wrench(), 100.0)
     assert not a.tick(101.9)
     assert a.tick(102.5)
-    assert listed(a) == {"robot.reduced_mode": False, "robot.no_state": True, "force.no_data": True}
-    assert a.table.get("robot.no_state").severity == ERROR and a.table.get("force.no_data").severity == WARNING
+    assert listed(a) == {"robot.arm.reduced_mode": False, "robot.arm.no_state": True, "force.no_data": True}
+    assert a.table.get("robot.arm.no_state").severity == ERROR and a.table.get("force.no_data").severity == WARNING
     st = a.status()
     assert (st.controller_connected, st.safety_mode, st.robot_mode) == (False, "", "")
     assert not a.tick(103.0)                                  # raised once
-    a.on_robot_state(robot(), 104.0)
+    a.on_robot_state("arm", robot(), 104.0)
     a.on_wrench(WRENCH, wrench(), 104.0)
-    assert listed(a) == {"robot.reduced_mode": False, "robot.no_state": False, "force.no_data": False}
+    assert listed(a) == {"robot.arm.reduced_mode": False, "robot.arm.no_state": False, "force.no_data": False}
     assert Alarms(parse_alarms(cell(timeout_s=0)), 0.0).tick(1e9) is False
 
 
 def test_an_expected_driver_that_never_publishes_raises_no_state_after_the_grace() -> None:
     c = cell(force_limit_n=80, timeout_s=2, startup_grace_s=10)
-    c["manual"] = {"groups": []}                               # the cell has a robot driver
+    c["manual"] = {"groups": [{"name": "arm", "joints": ["elbow_joint"]}]}  # the cell has a robot driver
     a = Alarms(parse_alarms(c), 100.0)
     assert not a.tick(109.0) and a.alarms() == []
     assert a.tick(110.5)
-    assert a.alarms()[0].id == "robot.no_state" and "since the start (10 s)" in a.alarms()[0].text
-    a.on_robot_state(robot(), 111.0)
-    assert listed(a) == {"robot.no_state": False}
+    assert a.alarms()[0].id == "robot.arm.no_state" and a.alarms()[0].text == (
+        "Robot arm: no robot state from the driver on /cell/manual/arm/state since the start (10 s)")
+    a.on_robot_state("arm", robot(), 111.0)
+    assert listed(a) == {"robot.arm.no_state": False}
     assert not Alarms(parse_alarms(cell(timeout_s=2)), 100.0).tick(200.0)  # no driver in the cell: no alarm
 
 
 def test_the_drivers_first_connection_after_start_is_no_alarm_until_the_grace_is_over() -> None:
     a = make(now=100.0, startup_grace_s=10)
     down = robot(connected=False, safety="", mode="NO_CONTROLLER")
-    assert not a.on_robot_state(down, 101.0) and a.alarms() == []   # still connecting
+    assert not a.on_robot_state("arm", down, 101.0) and a.alarms() == []   # still connecting
     assert not a.tick(102.5)
-    assert a.on_robot_state(robot(), 106.0) is False and a.alarms() == []  # connected: nothing ever listed
-    assert a.on_robot_state(down, 107.0)                              # connected once: now it is "lost"
-    assert listed(a) == {"robot.disconnected": True}
+    assert a.on_robot_state("arm", robot(), 106.0) is False and a.alarms() == []  # connected: nothing ever listed
+    assert a.on_robot_state("arm", down, 107.0)                              # connected once: now it is "lost"
+    assert listed(a) == {"robot.arm.disconnected": True}
     b = make(now=100.0, startup_grace_s=10)
-    b.on_robot_state(down, 101.0)
-    b.on_robot_state(down, 109.0)
+    b.on_robot_state("arm", down, 101.0)
+    b.on_robot_state("arm", down, 109.0)
     assert b.alarms() == []
     assert b.tick(110.5)                                              # never connected within the grace
-    assert listed(b) == {"robot.disconnected": True} and b.table.get("robot.disconnected").first_seen == 110.5
+    assert listed(b) == {"robot.arm.disconnected": True} and b.table.get("robot.arm.disconnected").first_seen == 110.5
 
 
 # ---------------------------------------------------------------------------------------------- reset
 def test_reset_clears_inactive_keeps_active_and_says_what() -> None:
     a = make()
     a.on_faults("/sim/faults", [fault("door_open", True), fault("gripper_fault", True)], 1.0)
-    a.on_robot_state(robot(safety="PROTECTIVE_STOP"), 1.0)
+    a.on_robot_state("arm", robot(safety="PROTECTIVE_STOP"), 1.0)
     a.on_faults("/sim/faults", [fault("door_open", False), fault("gripper_fault", True)], 2.0)
     ok, message = a.reset()
     assert ok and message == ("cleared 1 inactive alarm (device.door_open); "
-                              "2 still active (device.gripper_fault, robot.protective_stop)")
-    assert listed(a) == {"robot.protective_stop": True, "device.gripper_fault": True}
+                              "2 still active (device.gripper_fault, robot.arm.protective_stop)")
+    assert listed(a) == {"robot.arm.protective_stop": True, "device.gripper_fault": True}
     assert a.table.get("device.gripper_fault").first_seen == 1.0  # an active alarm keeps its history
-    a.on_robot_state(robot(), 3.0)
+    a.on_robot_state("arm", robot(), 3.0)
     a.on_faults("/sim/faults", [fault("gripper_fault", False)], 3.0)
-    assert a.reset() == (True, "cleared 2 inactive alarms (device.gripper_fault, robot.protective_stop)")
+    assert a.reset() == (True, "cleared 2 inactive alarms (device.gripper_fault, robot.arm.protective_stop)")
     assert a.alarms() == []
     assert a.reset() == (True, "no inactive alarm to clear")
 
@@ -266,9 +267,9 @@ def test_overall_status_follows_the_most_urgent_condition() -> None:
     st = a.status()
     assert (st.status, st.text, st.active_count, st.inactive_count, st.highest_severity) == \
         ("normal", "no active alarm", 0, 0, -1)
-    a.on_robot_state(robot(mode="POWER_OFF", safety="NORMAL"), 1.0)
+    a.on_robot_state("arm", robot(mode="POWER_OFF", safety="NORMAL"), 1.0)
     assert (a.status().status, a.status().highest_severity, a.status().robot_mode) == ("normal", INFO, "POWER_OFF")
-    a.on_robot_state(robot(safety="REDUCED"), 2.0)
+    a.on_robot_state("arm", robot(safety="REDUCED"), 2.0)
     st = a.status()
     assert (st.status, st.highest_severity, st.safety_mode, st.controller_connected) == \
         ("warning", WARNING, "REDUCED", True)
@@ -277,10 +278,10 @@ def test_overall_status_follows_the_most_urgent_condition() -> None:
     assert (a.status().status, a.status().text) == ("fault", "gripper_fault text")
     for safety, status in (("SAFEGUARD_STOP", "safeguard stop"), ("PROTECTIVE_STOP", "protective stop"),
                            ("SYSTEM_EMERGENCY_STOP", "emergency stop")):
-        a.on_robot_state(robot(safety=safety), 4.0)
+        a.on_robot_state("arm", robot(safety=safety), 4.0)
         assert a.status().status == status
     a.on_faults("/sim/faults", [], 5.0)
-    a.on_robot_state(robot(), 5.0)
+    a.on_robot_state("arm", robot(), 5.0)
     a.reset()
     assert a.status().status == "normal" and a.status().inactive_count == 0
 
@@ -290,10 +291,10 @@ def test_outputs_publish_on_change_and_once_a_period() -> None:
     alarms, status = a.outputs(0.0)
     assert alarms == [] and status.status == "normal"           # the first call publishes both
     assert a.outputs(0.1) == (None, None)                       # nothing changed
-    a.on_robot_state(robot(safety="REDUCED"), 0.2)
+    a.on_robot_state("arm", robot(safety="REDUCED"), 0.2)
     alarms, status = a.outputs(0.2)
-    assert [x.id for x in alarms] == ["robot.reduced_mode"] and status.status == "warning"
-    a.on_robot_state(robot(safety="REDUCED", mode="IDLE"), 0.3)
+    assert [x.id for x in alarms] == ["robot.arm.reduced_mode"] and status.status == "warning"
+    a.on_robot_state("arm", robot(safety="REDUCED", mode="IDLE"), 0.3)
     alarms, status = a.outputs(0.3)
     assert alarms is None and status.robot_mode == "IDLE"       # status-only change
     a.tick(1.05)
@@ -328,7 +329,7 @@ def test_mode_goes_to_alarm_on_an_error_and_back_when_it_clears() -> None:
 def test_warnings_do_not_change_the_mode() -> None:
     a = make()
     a.on_mode("running", "ui")
-    a.on_robot_state(robot(safety="REDUCED"), 1.0)
+    a.on_robot_state("arm", robot(safety="REDUCED"), 1.0)
     a.on_modules([{"name": "vision", "state": "incomplete"}], 1.0)
     assert a.mode_request() is None
     a = make(severity={"module.*": "error"})
@@ -379,6 +380,7 @@ def test_demo_cell_section() -> None:
     assert cfg.wrench_topics == ("/cell/wrench",)              # from the sensors of type WrenchStamped
     assert cfg.fault_topics == ("/sim/faults",)
     assert cfg.robot_expected and cfg.timeout_s == 2 and cfg.startup_grace_s == 10
+    assert cfg.robot_state_topics == (("arm", "/cell/manual/arm/state"),)   # one per motion group
     assert (cfg.alarm_mode, cfg.mode_topic, cfg.set_mode_service) == ("alarm", "/cell/mode", "/cell/set_mode")
 
 
@@ -393,7 +395,9 @@ def test_defaults_and_errors_name_the_field() -> None:
                            ({"force_clear_n": 50}, "alarms.force_clear_n"),
                            ({"fault_topics": ["sim/faults"]}, "alarms.fault_topics[0]"),
                            ({"severity": {"robot.*": "fatal"}}, "alarms.severity.robot.*"),
-                           ({"timeout_s": -1}, "alarms.timeout_s")):
+                           ({"timeout_s": -1}, "alarms.timeout_s"),
+                           ({"robot_state_topics": {"legs": "/x"}}, "alarms.robot_state_topics.legs"),
+                           ({"robot_state_topics": ["/x"]}, "alarms.robot_state_topics")):
         with pytest.raises(ConfigError, match=rf"^{where}:".replace(".", r"\.").replace("*", r"\*")
                            .replace("[", r"\[").replace("]", r"\]")):
             parse_alarms(cell(**section))
@@ -404,3 +408,70 @@ def test_two_wrench_topics_get_one_alarm_each() -> None:
     a.on_wrench("/left/wrench", wrench(0, 0, 100), 1.0)
     a.on_wrench("/right/wrench", wrench(0, 0, 100), 1.0)
     assert set(listed(a)) == {"force.limit:/left/wrench", "force.limit:/right/wrench"}
+
+
+# ---------------------------------------------------------------------------------------------- several groups
+TWIN = {"groups": [{"name": "left", "joints": ["left_elbow_joint"]}, {"name": "right", "joints": ["right_elbow_joint"]}]}
+
+
+def twin(now: float = 100.0, **alarms) -> Alarms:
+    c = cell(**alarms)
+    c["manual"] = TWIN
+    return Alarms(parse_alarms(c), now)
+
+
+def test_every_group_is_watched_on_its_own_topic_with_its_own_ids() -> None:
+    cfg = parse_alarms({**cell(), "manual": TWIN})
+    assert cfg.robot_state_topics == (("left", "/cell/manual/left/state"), ("right", "/cell/manual/right/state"))
+    moved = parse_alarms({**cell(robot_state_topics={"right": "/other/right/state"}), "manual": TWIN})
+    assert moved.robot_state_topics == (("left", "/cell/manual/left/state"), ("right", "/other/right/state"))
+    a = twin(now=0.0)
+    a.on_robot_state("left", robot(), 1.0)
+    a.on_robot_state("right", robot(safety="PROTECTIVE_STOP"), 1.0)
+    (alarm,) = a.alarms()
+    assert (alarm.id, alarm.severity, alarm.source) == ("robot.right.protective_stop", ERROR, "robot")
+    assert alarm.text == "Robot right: protective stop: the robot stopped; clear the cause, then unlock it"
+    st = a.status()
+    assert (st.status, st.safety_mode, st.robot_mode, st.controller_connected) == \
+        ("protective stop", "PROTECTIVE_STOP", "RUNNING", True)
+    a.on_robot_state("left", robot(connected=False, safety="", mode="NO_CONTROLLER", host="127.0.2.1"), 2.0)
+    assert listed(a) == {"robot.left.disconnected": True, "robot.right.protective_stop": True}
+    assert a.table.get("robot.left.disconnected").text == "Robot left: robot controller at 127.0.2.1 is unreachable"
+    assert a.status().controller_connected is False            # one arm's controller is enough to say so
+    a.on_robot_state("right", robot(), 3.0)                     # the right arm's stop clears; the left one stays
+    assert listed(a) == {"robot.left.disconnected": True, "robot.right.protective_stop": False}
+    assert a.status().status == "fault" and a.table.active_ids(ERROR) == {"robot.left.disconnected"}
+
+
+def test_a_silent_group_raises_its_own_no_state_and_the_other_keeps_its_modes() -> None:
+    a = twin(now=100.0, timeout_s=2, startup_grace_s=10)
+    a.on_robot_state("left", robot(safety="REDUCED"), 101.0)
+    a.on_robot_state("right", robot(), 101.0)
+    for t in (102.0, 103.0, 104.0):
+        a.on_robot_state("left", robot(safety="REDUCED"), t)   # left keeps talking, right fell silent at 101
+    assert a.tick(104.0)
+    assert listed(a) == {"robot.left.reduced_mode": True, "robot.right.no_state": True}
+    assert a.table.get("robot.right.no_state").text == \
+        "Robot right: no robot state from the driver on /cell/manual/right/state for 2 s"
+    st = a.status()
+    assert (st.safety_mode, st.robot_mode, st.controller_connected) == ("REDUCED", "", False)  # right: unknown
+    a.on_robot_state("right", robot(), 105.0)
+    assert listed(a) == {"robot.left.reduced_mode": True, "robot.right.no_state": False}
+
+
+def test_a_group_that_never_publishes_raises_no_state_after_the_grace_alone() -> None:
+    a = twin(now=100.0, timeout_s=2, startup_grace_s=10)
+    for t in range(101, 112):
+        a.on_robot_state("left", robot(), float(t))
+    assert a.tick(110.5)
+    assert listed(a) == {"robot.right.no_state": True}
+    assert "since the start (10 s)" in a.table.get("robot.right.no_state").text
+
+
+def test_severity_globs_reach_every_group() -> None:
+    a = twin(now=0.0, severity={"robot.*.reduced_mode": "info", "robot.left.power_off": "warning"})
+    a.on_robot_state("left", robot(safety="REDUCED", mode="POWER_OFF"), 1.0)
+    a.on_robot_state("right", robot(safety="REDUCED", mode="POWER_OFF"), 1.0)
+    sev = {x.id: x.severity for x in a.alarms()}
+    assert sev == {"robot.left.reduced_mode": INFO, "robot.right.reduced_mode": INFO,
+                   "robot.left.power_off": WARNING, "robot.right.power_off": INFO}

@@ -42,7 +42,7 @@ class Driver:
 
     def __init__(self) -> None:
         from cell_msgs.msg import RobotState
-        self.pub = rospy.Publisher("/cell/manual/state", RobotState, queue_size=5)
+        self.pub = rospy.Publisher("/cell/manual/arm/state", RobotState, queue_size=5)
         self.msg = RobotState(connected=True, controller=HOST, robot_mode="RUNNING", safety_mode="NORMAL")
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
@@ -158,17 +158,17 @@ def test_faults_become_alarms_switch_the_mode_and_reset_clears_them(cell) -> Non
     wait_for(lambda: status.msg.status == "protective stop", 3, what="protective stop status")
     r = reset()
     assert r.success and r.message == "cleared 1 inactive alarm (device.gripper_fault); " \
-                                      "1 still active (robot.protective_stop)"
-    wait_for(lambda: active(alarms) == {"robot.protective_stop": True}, 3, what="only the active alarm left")
+                                      "1 still active (robot.arm.protective_stop)"
+    wait_for(lambda: active(alarms) == {"robot.arm.protective_stop": True}, 3, what="only the active alarm left")
 
     # A late subscriber (another process) gets the current list at once: latched.
     out = subprocess.run(["rostopic", "echo", "-n", "1", "/cell/alarms/list"], capture_output=True, text=True,
                          timeout=20)
     late = yaml.safe_load(out.stdout.split("---")[0])
-    assert [(x["id"], x["active"]) for x in late["alarms"]] == [("robot.protective_stop", True)]
+    assert [(x["id"], x["active"]) for x in late["alarms"]] == [("robot.arm.protective_stop", True)]
 
     cell["driver"].msg.safety_mode = "NORMAL"
-    wait_for(lambda: active(alarms) == {"robot.protective_stop": False}, 3, what="protective stop gone")
+    wait_for(lambda: active(alarms) == {"robot.arm.protective_stop": False}, 3, what="protective stop gone")
     wait_for(lambda: (mode.msg.mode, mode.msg.source) == ("running", "alarms"), 5, what="mode back again")
 
     # The wrist force above the limit (norm 85 N, no single axis above 80 N).
@@ -202,7 +202,7 @@ def test_faults_become_alarms_switch_the_mode_and_reset_clears_them(cell) -> Non
 
     # The driver falls silent (timeout_s 1): an error alarm, the controller counts as not connected.
     cell["driver"].stop()
-    wait_for(lambda: active(alarms).get("robot.no_state") is True, 4, what="no robot state alarm")
+    wait_for(lambda: active(alarms).get("robot.arm.no_state") is True, 4, what="no robot state alarm")
     wait_for(lambda: not status.msg.controller_connected and status.msg.status == "fault", 3, what="status")
     assert (status.msg.safety_mode, status.msg.robot_mode) == ("", "")
     wait_for(lambda: mode.msg.mode == "alarm", 5, what="mode alarm for the silent driver")

@@ -11,7 +11,7 @@ from typing import Any, Callable
 import pytest
 import yaml
 
-from cell_nodes.check import EXIT_OK, EXIT_PROBLEMS, EXIT_UNREADABLE, check_cell, main
+from cell_nodes.check import EXIT_OK, EXIT_PROBLEMS, EXIT_UNREADABLE, Report, check_cell, check_manual, main
 
 DEMO = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
 _DEMO_DOC = yaml.safe_load(DEMO.read_text(encoding="utf-8"))
@@ -71,7 +71,27 @@ MISTAKES: list[tuple[str, Callable[[dict], None], str]] = [
     ("parameter min above max", lambda d: _set_param(d, min=300),
      r"^parameters\.items\[0\]\.min: 300\.?0? is above max 200"),
     ("joint that is not a UR joint", lambda d: d["manual"]["groups"][0]["joints"].__setitem__(2, "elbow"),
-     r"^manual\.groups\[0\]\.joints\[2\]: 'elbow' is not a joint of the robot \(shoulder_pan_joint, "),
+     r"^manual\.groups\[0\]\.joints\[2\]: 'elbow' is not a joint of the robot \(a joint name ends with one of "
+     r"shoulder_pan_joint, "),
+    ("the same robot joint twice in a group",
+     lambda d: d["manual"]["groups"][0]["joints"].__setitem__(2, "x_wrist_3_joint"),
+     r"^manual\.groups\[0\]\.joints\[5\]: 'wrist_3_joint' is the same robot joint \(wrist_3_joint\) as joints\[2\]$"),
+    ("a tool on a group the cell does not have", lambda d: d["manual"]["tools"][0].update(group="legs"),
+     r"^manual\.tools\[0\]\.group: 'legs' is not a motion group \(manual\.groups: arm\)$"),
+    ("a host that is no host", lambda d: d["manual"]["groups"][0].update(host="ur 5"),
+     r"^manual\.groups\[0\]\.host: expected a host name or an IPv4 address, got 'ur 5'$"),
+    ("two arms publishing the same joint names",
+     lambda d: d["manual"]["groups"].append({"name": "other", "host": "127.0.2.9", "joints": ["elbow_joint"]}),
+     r"^manual\.groups\[1\]: joint name 'elbow_joint' is also a joint of the arm at 127\.0\.0\.1 \(group arm\)"),
+    ("a tool step naming another group than its tool's",
+     lambda d: (d["manual"]["groups"].append({"name": "wrist", "joints": ["wrist_3_joint"]}),
+                steps(d)[1].update(group="wrist")),
+     r"^process\.operations\[0\]\.steps\[1\]\.group: tool gripper is on group arm \(manual\.tools\), not wrist$"),
+    ("a start configuration of an unknown group", lambda d: d["process"].update(start_configuration={"legs": "home"}),
+     r"^process\.start_configuration\.legs: unknown motion group 'legs'"),
+    ("a start configuration a group does not have",
+     lambda d: d["process"].update(start_configuration={"arm": "nowhere"}),
+     r"^process\.start_configuration\.arm: unknown configuration 'nowhere' for group arm"),
     ("configuration with the wrong number of values",
      lambda d: d["manual"]["groups"][0]["configurations"].update(home=[0, 0, 0, 0, 0]),
      r"^manual\.groups\[0\]\.configurations\.home: 5 values for 6 joints$"),
@@ -143,9 +163,31 @@ def test_what_a_node_only_logs_is_a_warning(capsys, tmp_path: Path) -> None:
 
 def test_a_parser_that_crashes_is_reported_too() -> None:
     d = demo()
-    del d["manual"]["groups"][0]["name"]   # the schema requires it; the driver would die of a KeyError
+    d["manual"]["groups"][0]["configurations"] = [[0, 0]]   # the schema refuses it; the driver would die of it
     problems = check_cell(d).problems
-    assert any(p.startswith("manual: the robot driver cannot read this section (KeyError") for p in problems), problems
+    assert any(p.startswith("manual: the robot driver cannot read this section (AttributeError") for p in problems), \
+        problems
+
+
+def test_hosts_come_from_the_environment_the_check_runs_in() -> None:
+    """UR_HOSTS and UR_HOST are read as the driver reads them: a UR_HOSTS naming a group the cell lacks, or two
+    groups whose joint names differ on one arm, is a problem here too."""
+    d = demo()
+    d["manual"]["groups"].append({"name": "right", "host": "127.0.2.2", "joints": [
+        "right_shoulder_pan_joint", "right_shoulder_lift_joint", "right_elbow_joint", "right_wrist_1_joint",
+        "right_wrist_2_joint", "right_wrist_3_joint"], "configurations": {"home": [0, -1.57, 1.57, -1.57, -1.57, 0]}})
+    assert check_cell(d).problems == []
+    report = Report()
+    check_manual(d, report, {"UR_HOSTS": "legs=127.0.3.1"})
+    assert report.problems == ["UR_HOSTS: 'legs' is not a motion group of this cell (manual.groups: arm, right)"]
+    report = Report()
+    check_manual(d, report, {"UR_HOSTS": "right=127.0.0.1"})  # both groups on one arm: the joints disagree
+    assert len(report.problems) == 1 and report.problems[0].startswith(
+        "manual.groups[1].joints[0]: 'right_shoulder_pan_joint' is robot joint shoulder_pan_joint of the arm at "
+        "127.0.0.1, which group arm calls 'shoulder_pan_joint'"), report.problems
+    report = Report()
+    check_manual(d, report, {"UR_HOST": "ur5.local", "UR_HOSTS": " right = 10.0.0.7 "})
+    assert report.problems == []
 
 
 def test_an_unknown_initial_mode() -> None:

@@ -14,9 +14,11 @@ import pytest
 import yaml
 
 from cell_nodes.manual import frames
-from cell_nodes.manual.config import ConfigError, DigitalOut, MoveNamedStep, Wait, WaitInput, parse_manual
+from cell_nodes.manual.cell_driver import CellDriver
+from cell_nodes.manual.config import (ConfigError, DigitalOut, MoveNamedStep, Wait, WaitInput, parse_manual, plan_arms,
+                                      resolve_hosts, ur_joint_index)
 from cell_nodes.manual.controller import CallTimeout, Gate, fk_lever
-from cell_nodes.manual.driver import ManualDriver
+from cell_nodes.manual.driver import DriverState, ManualDriver, Snapshot
 from cell_nodes.manual.jog import Decision, Jog, JogSupervisor
 from cell_nodes.manual.limits import (STOP_DECEL_JOINT, STOP_DECEL_TCP, TCP_COMMAND_MARGIN, TCP_SPEED_CAP,
                                       WATCHDOG_DECEL_JOINT, Limits)
@@ -690,3 +692,299 @@ def test_groups_service_content(driver: ManualDriver) -> None:
     assert limits.as_dict() == {"default_speed": 0.25, "default_acceleration": 0.5, "max_speed": 1.0,
                                 "max_acceleration": 1.5, "max_tcp_speed": 0.25, "max_tcp_acceleration": 1.0,
                                 "jog_timeout": 0.2}
+
+
+# ---------------------------------------------------------------------------------------------- hosts and arms
+TWIN_JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
+               "wrist_3_joint")
+
+
+def twin_section(**hosts: str) -> dict:
+    """Two arms (left: gripper; right: vacuum), joints named with a prefix, hosts from the file."""
+    left_home = [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
+    return {
+        "groups": [
+            {"name": "left", "host": hosts.get("left", "127.0.2.1"), "joints": [f"left_{j}" for j in TWIN_JOINTS],
+             "configurations": {"home": left_home}},
+            {"name": "right", "host": hosts.get("right", "127.0.2.2"), "joints": [f"right_{j}" for j in TWIN_JOINTS],
+             "configurations": {"home": left_home, "out": [1.0, -1.2, 1.6, -1.97, -1.5708, 0.4]}},
+        ],
+        "tools": [
+            {"name": "gripper", "actions": [{"name": "close", "steps": [{"digital_out": 0, "value": True}]}]},
+            {"name": "vacuum", "group": "right", "actions": [
+                {"name": "on", "steps": [{"digital_out": 4, "value": True}]},
+                {"name": "park", "steps": [{"move_named": "out", "group": "right"}]}]},
+        ],
+        "max_speed": 1.0,
+    }
+
+
+def test_joint_names_end_with_a_ur_joint_which_gives_the_index() -> None:
+    section = demo_section()
+    section["groups"].append({"name": "wrist", "joints": ["tool_side_wrist_3_joint", "my_wrist_1_joint"]})
+    cfg = parse_manual(section)
+    assert cfg.groups["wrist"].indices == (5, 3)
+    assert ur_joint_index("left_elbow_joint") == 2 and ur_joint_index("elbow") is None
+    twin = parse_manual(twin_section())
+    assert twin.groups["right"].joints[0] == "right_shoulder_pan_joint" and twin.groups["right"].indices == (
+        0, 1, 2, 3, 4, 5)
+    assert twin.groups["left"].host == "127.0.2.1" and cfg.groups["arm"].host is None
+    section["groups"][1]["joints"].append("x_wrist_3_joint")
+    with pytest.raises(ConfigError, match=r"^manual\.groups\[1\]\.joints\[2\]: 'x_wrist_3_joint' is the same robot "
+                                          r"joint \(wrist_3_joint\) as joints\[0\]$"):
+        parse_manual(section)
+
+
+def test_a_tool_belongs_to_its_group_default_the_first() -> None:
+    cfg = parse_manual(twin_section())
+    assert (cfg.tools["gripper"].group, cfg.tools["vacuum"].group) == ("left", "right")
+    assert parse_manual(demo_section()).tools["gripper"].group == "arm"
+    bad = twin_section()
+    bad["tools"][0]["group"] = "middle"
+    with pytest.raises(ConfigError, match=r"^manual\.tools\[0\]\.group: 'middle' is not a motion group "
+                                          r"\(manual\.groups: left, right\)$"):
+        parse_manual(bad)
+
+
+@pytest.mark.parametrize("section_hosts, environ, expected", [
+    ({}, {}, {"left": "127.0.2.1", "right": "127.0.2.2"}),                                  # the file's hosts
+    ({}, {"UR_HOSTS": "left=127.0.3.21,right=127.0.3.22"}, {"left": "127.0.3.21", "right": "127.0.3.22"}),
+    ({}, {"UR_HOSTS": " right = 127.0.3.22 ,, ", "UR_HOST": "10.0.0.1"}, {"left": "127.0.2.1", "right": "127.0.3.22"}),
+    ({"left": None, "right": None}, {"UR_HOST": "ur5.local"}, {"left": "ur5.local", "right": "ur5.local"}),
+    ({"left": None, "right": None}, {}, {"left": "127.0.0.1", "right": "127.0.0.1"}),      # no host at all
+    ({"left": None}, {"UR_HOST": " ", "UR_HOSTS": ""}, {"left": "127.0.0.1", "right": "127.0.2.2"}),
+])
+def test_resolve_hosts(section_hosts: dict, environ: dict, expected: dict) -> None:
+    section = twin_section()
+    for g in section["groups"]:
+        if g["name"] in section_hosts and section_hosts[g["name"]] is None:
+            del g["host"]
+    assert resolve_hosts(section, environ) == expected
+
+
+@pytest.mark.parametrize("environ, message", [
+    ({"UR_HOSTS": "left"}, "UR_HOSTS: expected <group>=<host>[,<group>=<host>...], got 'left'"),
+    ({"UR_HOSTS": "left=127.0.3.1,=x"}, "UR_HOSTS: expected <group>=<host>[,<group>=<host>...], got '=x'"),
+    ({"UR_HOSTS": "middle=127.0.3.1"}, "UR_HOSTS: 'middle' is not a motion group of this cell (manual.groups: "
+                                       "left, right)"),
+    ({"UR_HOSTS": "left=not a host"}, "UR_HOSTS: left=not a host: expected a host name or an IPv4 address"),
+    ({"UR_HOSTS": "left=300.1.1.1"}, "UR_HOSTS: left=300.1.1.1: expected a host name or an IPv4 address"),
+])
+def test_resolve_hosts_refuses_a_bad_environment(environ: dict, message: str) -> None:
+    with pytest.raises(ConfigError) as e:
+        resolve_hosts(twin_section(), environ)
+    assert str(e.value) == message
+
+
+def test_arms_are_the_groups_by_host_with_their_tools_and_joint_names() -> None:
+    cfg = parse_manual(twin_section())
+    left, right = plan_arms(cfg, resolve_hosts(twin_section(), {}))
+    assert (left.host, left.groups, left.tools) == ("127.0.2.1", ("left",), ("gripper",))
+    assert (right.host, right.groups, right.tools) == ("127.0.2.2", ("right",), ("vacuum",))
+    assert left.joint_names == tuple(f"left_{j}" for j in TWIN_JOINTS)
+    assert list(right.config(cfg).groups) == ["right"] and list(right.config(cfg).tools) == ["vacuum"]
+    # the demo: one arm, the UR names, as before
+    (arm,) = plan_arms(parse_manual(demo_section()), {"arm": "127.0.0.1"})
+    assert arm.joint_names == TWIN_JOINTS and arm.groups == ("arm",) and arm.tools == ("gripper",)
+    # groups of some joints on one arm: the joints no group names keep the arm's prefix
+    section = {"groups": [{"name": "base", "joints": ["a_shoulder_pan_joint"]},
+                          {"name": "wrist", "joints": ["a_wrist_3_joint", "a_wrist_2_joint"]}]}
+    (one,) = plan_arms(parse_manual(section), {"base": "h1", "wrist": "h1"})
+    assert one.joint_names == tuple(f"a_{j}" for j in TWIN_JOINTS) and one.groups == ("base", "wrist")
+
+
+def test_arms_refuse_what_would_mix_them_up() -> None:
+    cfg = parse_manual(twin_section())
+    with pytest.raises(ConfigError, match=r"^manual\.groups\[1\]\.joints\[0\]: 'right_shoulder_pan_joint' is robot "
+                                          r"joint shoulder_pan_joint of the arm at 127\.0\.0\.1, which group left calls "
+                                          r"'left_shoulder_pan_joint'"):
+        plan_arms(cfg, {"left": "127.0.0.1", "right": "127.0.0.1"})
+    same = twin_section()
+    same["groups"][1]["joints"] = list(same["groups"][0]["joints"])
+    with pytest.raises(ConfigError, match=r"^manual\.groups\[1\]: joint name 'left_shoulder_pan_joint' is also a "
+                                          r"joint of the arm at 127\.0\.2\.1 \(group left\)"):
+        plan_arms(parse_manual(same), resolve_hosts(same, {}))
+    cross = twin_section()
+    cross["tools"][0]["actions"].append({"name": "hand", "steps": [{"move_named": "out", "group": "right"}]})
+    with pytest.raises(ConfigError, match=r"^manual\.tools\[0\]\.actions\[1\]\.steps\[0\]: group 'right' is moved by "
+                                          r"the controller at 127\.0\.2\.2, not by the tool's \(left\) at 127\.0\.2\.1$"):
+        plan_arms(parse_manual(cross), resolve_hosts(cross, {}))
+
+
+# ---------------------------------------------------------------------------------------------- the cell driver
+class FakeArm:
+    """A driver that records what reaches it and answers as told."""
+
+    def __init__(self, host: str, groups: tuple[str, ...]) -> None:
+        self.host = host
+        self.groups = groups
+        self.calls: list[tuple] = []
+        self.on_change = lambda: None
+        self.on_sample = lambda snap: None
+        self.stop_answer = (True, "stopped")
+        self.stop_delay = 0.0
+        self.stopped_at: Optional[float] = None
+        self.connected = True
+        self.snap = Snapshot(connected=True, tcp_pose=(0.1, 0.2, 0.3, 0.0, 3.14, 0.0))
+
+    def _rec(self, *call) -> tuple[bool, str]:
+        self.calls.append(call)
+        return True, f"{call[0]} on {self.host}"
+
+    def start(self) -> None: self.calls.append(("start",))
+    def shutdown(self) -> None: self.calls.append(("shutdown",))
+
+    def state(self) -> DriverState:
+        return DriverState(self.connected, self.host, "RUNNING", "NORMAL", 1.0, False, "idle", "", "", 1.0,
+                           f"state of {self.host}", [0.0] * 6, list(self.snap.tcp_pose), [0.0] * 6)
+
+    def snapshot(self) -> Snapshot: return self.snap
+    def get_pose(self, group): self.calls.append(("get_pose", group)); return True, "pose", [1.0], [2.0] * 6
+    def move_named(self, group, name, speed=0.0, acceleration=0.0): return self._rec("move_named", group, name)
+    def move_relative(self, group, offset, frame, speed=0.0, acceleration=0.0):
+        return self._rec("move_relative", group, tuple(offset), frame)
+    def move_pose(self, group, pose, speed=0.0, acceleration=0.0): return self._rec("move_pose", group, tuple(pose))
+    def tool_action(self, tool, action): return self._rec("tool", tool, action)
+
+    def stop(self, wait: bool = True) -> tuple[bool, str]:
+        self.calls.append(("stop",))
+        time.sleep(self.stop_delay)
+        self.stopped_at = time.monotonic()
+        return self.stop_answer
+
+    def jog(self, group, mode, axis, direction, speed, frame="base"): self.calls.append(("jog", group, direction))
+    def refuse_jog(self, why): self.calls.append(("refuse_jog", why))
+
+
+def fake_cell(environ: Optional[dict] = None) -> tuple[CellDriver, FakeArm, FakeArm]:
+    cfg = parse_manual(twin_section())
+    made: list[FakeArm] = []
+
+    def make(arm, arm_config):
+        assert list(arm_config.groups) == list(arm.groups)
+        made.append(FakeArm(arm.host, arm.groups))
+        return made[-1]
+
+    cell = CellDriver.build(cfg, resolve_hosts(twin_section(), environ or {}), Limits.from_section(cfg.limits), make)
+    return cell, made[0], made[1]
+
+
+def test_requests_go_to_the_groups_arm_and_tools_to_their_groups_arm() -> None:
+    cell, left, right = fake_cell()
+    assert cell.move_named("left", "home") == (True, "move_named on 127.0.2.1")
+    assert cell.move_pose("right", [0.1] * 6) == (True, "move_pose on 127.0.2.2")
+    assert cell.move_relative("right", [0, 0, 0.1, 0, 0, 0], "tool")[0]
+    assert cell.get_pose("right") == (True, "pose", [1.0], [2.0] * 6)
+    assert cell.tool_action("vacuum", "on") == (True, "tool on 127.0.2.2")
+    assert cell.tool_action("gripper", "close") == (True, "tool on 127.0.2.1")
+    assert left.calls == [("move_named", "left", "home"), ("tool", "gripper", "close")]
+    assert right.calls == [("move_pose", "right", (0.1,) * 6), ("move_relative", "right", (0, 0, 0.1, 0, 0, 0), "tool"),
+                           ("get_pose", "right"), ("tool", "vacuum", "on")]
+    gs, tools, limits = cell.groups()
+    assert [g.name for g in gs] == ["left", "right"]
+    assert tools == [("gripper", ["close"], "left"), ("vacuum", ["on", "park"], "right")]
+    assert limits.max_speed == 1.0
+
+
+def test_unknown_names_are_refused_with_the_cells_names_and_reach_no_arm() -> None:
+    cell, left, right = fake_cell()
+    refusal = "unknown motion group 'middle' (the cell has: left, right)"
+    assert cell.move_named("middle", "home") == (False, refusal)
+    assert cell.move_pose("middle", [0] * 6) == (False, refusal)
+    assert cell.move_relative("middle", [0] * 6, "base") == (False, refusal)
+    assert cell.get_pose("middle") == (False, refusal, [], [])
+    assert cell.tool_action("drill", "on") == (False, "unknown tool 'drill' (the cell has: gripper, vacuum)")
+    assert left.calls == [] and right.calls == []
+    cell.jog("middle", "joint", 0, 1, 0.5)           # refused on every arm: a running jog there stops
+    assert left.calls == right.calls == [("refuse_jog", refusal)]
+    cell.jog("middle", "joint", 0, 0, 0.5)           # a release reaches every arm
+    assert left.calls[-1] == right.calls[-1] == ("jog", "middle", 0)
+    with pytest.raises(KeyError):
+        cell.state("middle")
+
+
+def test_jog_goes_to_its_groups_arm_only() -> None:
+    cell, left, right = fake_cell()
+    cell.jog("right", "joint", 2, -1, 0.5, "base")
+    cell.jog("right", "joint", 2, 0, 0.5, "base")
+    assert right.calls == [("jog", "right", -1), ("jog", "right", 0)] and left.calls == []
+
+
+def test_stop_reaches_every_arm_at_once_and_answers_after_all() -> None:
+    cell, left, right = fake_cell()
+    left.stop_delay = right.stop_delay = 0.3
+    t0 = time.monotonic()
+    assert cell.stop() == (True, "stopped")
+    took = time.monotonic() - t0
+    assert ("stop",) in left.calls and ("stop",) in right.calls
+    assert 0.3 <= took < 0.55                         # in parallel, and only once both answered
+    assert abs(left.stopped_at - right.stopped_at) < 0.1
+    right.stop_answer = (False, "robot controller at 127.0.2.2 is unreachable")
+    right.stop_delay = left.stop_delay = 0.0
+    assert cell.stop() == (False, "right: robot controller at 127.0.2.2 is unreachable (left stopped)")
+    left.stop_answer = (False, "robot controller at 127.0.2.1 is unreachable")
+    assert cell.stop() == (False, "left: robot controller at 127.0.2.1 is unreachable; right: robot controller at "
+                                  "127.0.2.2 is unreachable")
+
+
+def test_state_and_pose_per_group_and_change_reports_per_arm() -> None:
+    cell, left, right = fake_cell()
+    s = cell.state("right")
+    assert (s.controller, s.motion_group, s.message) == ("127.0.2.2", "right", "state of 127.0.2.2")
+    assert cell.state("left").motion_group == "left"
+    assert cell.tcp_pose("left") == (0.1, 0.2, 0.3, 0.0, 3.14, 0.0)
+    right.connected = False
+    assert cell.tcp_pose("right") is None              # nothing to publish while unreachable
+    changed: list = []
+    samples: list = []
+    cell.on_change = lambda arm: changed.append(arm.groups)
+    cell.on_sample = lambda arm, snap: samples.append((arm.joint_names[0], snap))
+    right.on_change()
+    left.on_sample(left.snap)
+    assert changed == [("right",)] and samples == [("left_shoulder_pan_joint", left.snap)]
+    cell.start()
+    cell.shutdown()
+    assert left.calls == right.calls == [("start",), ("shutdown",)]
+
+
+def test_one_host_for_both_groups_makes_one_arm() -> None:
+    section = demo_section()
+    section["groups"].append({"name": "wrist", "joints": ["wrist_3_joint", "wrist_1_joint"],
+                              "configurations": {"flat": [1.0, -1.0]}})
+    cfg = parse_manual(section)
+    made: list[FakeArm] = []
+    cell = CellDriver.build(cfg, resolve_hosts(section, {"UR_HOST": "10.0.0.5"}), Limits.from_section(cfg.limits),
+                            lambda arm, c: made.append(FakeArm(arm.host, arm.groups)) or made[-1])
+    (arm,) = made
+    assert arm.groups == ("arm", "wrist") and [a.host for a in cell.arms] == ["10.0.0.5"]
+    cell.move_named("wrist", "flat")
+    assert cell.stop() == (True, "stopped")
+    assert arm.calls == [("move_named", "wrist", "flat"), ("stop",)]
+
+
+def test_two_real_drivers_move_their_own_robot(robot: FakeRobot) -> None:
+    """The cell driver over two ManualDrivers on two fake controllers: each request moves only its arm; the tool's
+    output is set on the tool's arm; stop reaches both; the joint names are each arm's own."""
+    other = FakeRobot()
+    robots = {"127.0.2.1": robot, "127.0.2.2": other}
+    cfg = parse_manual(twin_section())
+    limits = Limits.from_section(cfg.limits)
+    cell = CellDriver.build(cfg, resolve_hosts(twin_section(), {}), limits,
+                            lambda arm, c: ManualDriver(c, arm.host, FakeConnector(robots[arm.host]), limits,
+                                                        joint_names=arm.joint_names))
+    left, right = cell.drivers
+    assert left.connect() and right.connect()
+    assert right.joint_names[0] == "right_shoulder_pan_joint" and left.joint_names[5] == "left_wrist_3_joint"
+    assert cell.move_named("right", "out") == (True, "arrived at out")
+    assert other.moves("moveJ") and not robot.moves("moveJ")
+    assert cell.tool_action("vacuum", "on") == (True, "vacuum on done")
+    assert other.moves("setStandardDigitalOut") == [("setStandardDigitalOut", 4, True)]
+    assert not robot.moves("setStandardDigitalOut")
+    assert cell.tool_action("gripper", "close") == (True, "gripper close done")
+    assert robot.moves("setStandardDigitalOut") == [("setStandardDigitalOut", 0, True)]
+    assert cell.move_named("left", "out") == (False, "unknown configuration 'out' for group left (it has: home)")
+    cell.jog("left", "joint", 0, 1, 0.5, "base")
+    assert robot.moves("speedJ") and not other.moves("speedJ")
+    assert cell.state("left").motion == "jogging" and cell.state("right").motion == "idle"
+    assert cell.stop() == (True, "stopped")
+    assert robot.moves("speedStop") and cell.state("left").motion == "idle"

@@ -91,24 +91,28 @@ def test_services_topics_and_a_jog_through_ros(node) -> None:
     from std_srvs.srv import Trigger
 
     joints = Latest("/joint_states", JointState)
-    state = Latest("/cell/manual/state", RobotState)
-    pose = Latest("/cell/manual/tcp_pose", PoseStamped)
+    state = Latest("/cell/manual/arm/state", RobotState)
+    pose = Latest("/cell/manual/arm/tcp_pose", PoseStamped)
     wait_for(lambda: state.msg is not None and state.msg.connected and joints.msg and pose.msg, 10,
              what="the driver's topics, connected")
     s = state.msg
     assert (s.controller, s.robot_mode, s.safety_mode, s.program_running) == (HOST, "RUNNING", "NORMAL", False)
     assert len(s.joint_positions) == 6 and len(s.tcp_pose) == 6 and len(s.tcp_speed) == 6
     assert s.message == f"connected to the robot controller at {HOST}" and s.motion == "idle"
+    assert s.motion_group == "arm"                      # the topic's group
+    topics = {name for name, _ in rospy.get_published_topics()}
+    assert "/cell/manual/state" not in topics and "/cell/manual/tcp_pose" not in topics
     assert list(joints.msg.name) == UR_JOINTS and len(joints.msg.velocity) == 6
     assert pose.msg.header.frame_id == "base"
     time.sleep(1.0)  # a one-second window to measure the publication rates in (nothing to wait for)
-    print(f"\n/joint_states at {joints.rate():.0f} Hz, /cell/manual/state at {state.rate():.0f} Hz")
+    print(f"\n/joint_states at {joints.rate():.0f} Hz, /cell/manual/arm/state at {state.rate():.0f} Hz")
     assert joints.rate() > 80 and 15 < state.rate() < 40
 
     groups = rospy.ServiceProxy("/cell/manual/groups", GetMotionGroups)()
     assert [g.name for g in groups.groups] == ["arm"] and list(groups.groups[0].joints) == UR_JOINTS
     assert [c.name for c in groups.groups[0].configurations] == ["home", "pick_approach"]
-    assert [(t.name, list(t.actions)) for t in groups.tools] == [("gripper", ["open", "close", "check_part"])]
+    assert [(t.name, list(t.actions), t.group) for t in groups.tools] == [
+        ("gripper", ["open", "close", "check_part"], "arm")]
     assert groups.limits.max_tcp_speed == 0.25 and groups.limits.jog_timeout == pytest.approx(0.2)
 
     move_named = rospy.ServiceProxy("/cell/manual/move_named", MoveNamed)

@@ -13,7 +13,7 @@ import yaml
 
 from cell_nodes.process.client import LOG_SIZE, ProcessClient
 from cell_nodes.process.conditions import ConditionError, field_value, holds
-from cell_nodes.process.config import ConfigError, MovePose, parse_cell_process, parse_process
+from cell_nodes.process.config import ConfigError, MovePose, Tool, parse_cell_process, parse_process
 from cell_nodes.process.executor import (ERROR, IDLE, PAUSED, PAUSING, RUNNING, STOPPING, Executor, Progress,
                                          RunRequest, RunResult)
 from cell_nodes.process.mode import ModeFollower
@@ -219,7 +219,10 @@ def test_demo_cell_section_parses_with_the_demo_manual_section() -> None:
     assert cfg.action == "/cell/process/run" and cfg.start_configuration == "home"
     assert cfg.names == ["pick part", "place in fixture", "return home"]
     assert len(cfg.poses["part"]) == 3 and len(cfg.poses["pocket"]) == 3
-    assert cfg.start_joints == (0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0) and cfg.start_indices == (0, 1, 2, 3, 4, 5)
+    (start,) = cfg.start_targets
+    assert (start.group, start.configuration) == ("arm", "home") and cfg.start_groups == ("arm",)
+    assert start.joints == (0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0) and start.indices == (0, 1, 2, 3, 4, 5)
+    assert {s.group for op in cfg.operations for s in op.steps if isinstance(s, Tool)} == {"arm"}
     texts = [describe(s, 2, cfg.poses) for op in cfg.operations for s in op.steps]
     assert "Move to home" in texts and "Gripper close" in texts and "Move to part 2 (approach)" in texts
     assert "Move to pocket 2" in texts
@@ -282,6 +285,11 @@ def _steps(*steps: Any) -> dict:
     (_steps("home"), "process.operations[0].steps[0]: expected a step"),
     (_with(poses={"part": []}), "process.poses.part: expected a non-empty list of poses"),
     (_with(start_configuration="away"), "process.start_configuration: unknown configuration 'away'"),
+    (_with(start_configuration={"arm": "away"}), "process.start_configuration.arm: unknown configuration 'away'"),
+    (_with(start_configuration={"legs": "home"}), "process.start_configuration.legs: unknown motion group 'legs'"),
+    (_with(start_configuration={}), "process.start_configuration: expected a configuration name or a mapping"),
+    (_steps({"tool": "gripper", "action": "open", "group": "legs"}),
+     "process.operations[0].steps[0].group: unknown motion group 'legs'"),
     (_with(tcp_speed=-1), "process.tcp_speed: must be above 0"),
 ])
 def test_bad_sections_are_refused_naming_the_field(section: Any, message: str) -> None:
@@ -797,3 +805,71 @@ def test_the_demo_cell_reads_its_approach_height_from_the_parameters_csv(tmp_pat
     cell = load_cell(str(Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"))
     approach = parse_cell_process(cell).operations[0].steps[2]
     assert approach.offset[2] == pytest.approx(0.08)
+
+
+
+# ================================================================================================ two arms
+TWIN_MANUAL = {
+    "groups": [
+        {"name": "left", "host": "127.0.2.1", "joints": [f"left_{j}" for j in ("shoulder_pan_joint", "shoulder_lift_joint",
+                                                                               "elbow_joint", "wrist_1_joint",
+                                                                               "wrist_2_joint", "wrist_3_joint")],
+         "configurations": {"home": [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0],
+                            "handover": [1.0, -1.2, 1.6, -1.97, -1.5708, 0.4]}},
+        # a group of some joints, in another order: the indices come from the UR names the joints end with
+        {"name": "right", "host": "127.0.2.2", "joints": ["right_wrist_3_joint", "right_shoulder_pan_joint"],
+         "configurations": {"home": [0.5, -0.5], "out": [0.0, 1.0]}}],
+    "tools": [{"name": "gripper", "actions": [{"name": "close", "steps": [{"wait_s": 0.1}]}]},
+              {"name": "vacuum", "group": "right", "actions": [{"name": "on", "steps": [{"wait_s": 0.1}]}]}],
+}
+LEFT_HOME = [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
+
+
+def twin_section(**changes: Any) -> dict:
+    s = {"group": "left", "start_configuration": {"left": "home", "right": "home"},
+         "operations": [{"name": "hand over", "steps": [
+             {"move_named": "handover"}, {"tool": "gripper", "action": "close"},
+             {"move_named": "out", "group": "right"}, {"tool": "vacuum", "action": "on"},
+             {"tool": "vacuum", "action": "on", "group": "right"}]}]}
+    s.update(changes)
+    return s
+
+
+def test_start_configuration_per_group_and_tool_steps_on_their_tools_group() -> None:
+    cfg = parse_process(twin_section(), TWIN_MANUAL)
+    assert cfg.start_configuration == "left: home, right: home" and cfg.start_groups == ("left", "right")
+    left, right = cfg.start_targets
+    assert (left.indices, left.joints) == ((0, 1, 2, 3, 4, 5), tuple(LEFT_HOME))
+    assert (right.indices, right.joints) == ((5, 0), (0.5, -0.5))
+    steps = cfg.operations[0].steps
+    assert [s.motion.group for s in steps if not isinstance(s, Tool)] == ["left", "right"]
+    assert [(s.tool, s.group) for s in steps if isinstance(s, Tool)] == [("gripper", "left"), ("vacuum", "right"),
+                                                                         ("vacuum", "right")]
+    with pytest.raises(ConfigError, match=r"^process\.operations\[0\]\.steps\[0\]\.group: tool vacuum is on "
+                                          r"group right \(manual\.tools\), not left$"):
+        parse_process(twin_section(operations=[{"name": "x", "steps": [
+            {"tool": "vacuum", "action": "on", "group": "left"}]}]), TWIN_MANUAL)
+    # a name: the configuration of process.group, as before
+    named = parse_process(twin_section(start_configuration="handover"), TWIN_MANUAL)
+    assert named.start_configuration == "handover" and named.start_groups == ("left",)
+
+
+def test_at_start_needs_every_listed_group_there() -> None:
+    c = ProcessClient(parse_process(twin_section(), TWIN_MANUAL))
+    assert not c.at_start()                                  # nothing known
+    c.on_joints(LEFT_HOME, "left")
+    assert not c.at_start()                                  # the right arm still unknown
+    right = [-0.5, 9.0, 9.0, 9.0, 9.0, 0.5]                  # only its joints 6 and 1 count (0.5, -0.5)
+    c.on_joints(right, "right")
+    assert c.at_start() and c.view().at_start and c.view().start_configuration == "left: home, right: home"
+    c.on_joints([-0.5, 0, 0, 0, 0, 0.52], "right")           # right's wrist 3 off by 0.02 rad
+    assert not c.at_start()
+    c.on_joints(right, "right")
+    c.on_joints([0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.02], "left")
+    assert not c.at_start()
+    only_left = ProcessClient(parse_process(twin_section(start_configuration={"left": "home"}), TWIN_MANUAL))
+    only_left.on_joints(LEFT_HOME, "left")
+    assert only_left.at_start()                              # the right arm is not asked about
+    by_name = ProcessClient(parse_process(twin_section(start_configuration="home"), TWIN_MANUAL))
+    by_name.on_joints(LEFT_HOME)                             # no group: process.group
+    assert by_name.at_start()

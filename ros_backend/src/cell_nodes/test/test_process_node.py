@@ -269,7 +269,7 @@ def test_state_describes_the_process_and_at_start_follows_the_robot(env: dict) -
     assert (s.state, s.ready, s.current, s.step_index, s.dry_run, s.run_mode) == ("idle", True, -1, -1, False, "")
     assert (s.cycle, s.cycles_done, s.start_configuration) == (1, 0, "home")
     assert not s.at_start                               # no robot state yet
-    pub = rospy.Publisher("/cell/manual/state", RobotState, queue_size=5)
+    pub = rospy.Publisher("/cell/manual/arm/state", RobotState, queue_size=5)
     try:
         wait_for(lambda: pub.get_num_connections() > 0, 5, what="the client subscribed to the robot state")
         for joints, expected in ((HOME, True), ([0.3] + HOME[1:], False), ([0.004] + HOME[1:], True)):

@@ -72,7 +72,7 @@ def cell(roscore: str) -> Iterator[dict]:
         start_process_nodes(procs, CELL, "process_sim")
         ui, joints = Ui(), Joints()
         objects = Latest("/sim/objects", PoseArray)
-        robot = Latest("/cell/manual/state", RobotState)
+        robot = Latest("/cell/manual/arm/state", RobotState)
         wait_for(lambda: procs.alive() and service_up("/cell/process/start") and service_up("/cell/manual/stop"),
                  30, what="the nodes' services")
         wait_for(lambda: robot.msg is not None and robot.msg.connected and joints.msg is not None, 15,

@@ -509,3 +509,42 @@ def test_log_keeps_the_last_200_newest_last() -> None:
     assert len(entries) == 200 and entries[0].text == "entry 5" and entries[-1].text == "entry 204"
     assert seen[-1] == 200 and len(seen) == 205
     assert all(a.stamp <= b.stamp for a, b in zip(entries, entries[1:]))
+
+
+# ================================================================ two arms: a routine uses its group's tools
+TWIN = {
+    "manual": {
+        "groups": [{"name": "left", "host": "127.0.2.1", "joints": ["left_elbow_joint", "left_wrist_3_joint"]},
+                   {"name": "right", "host": "127.0.2.2", "joints": ["right_elbow_joint"]}],
+        "tools": [{"name": "gripper", "actions": [{"name": "close", "steps": [{"wait_s": 0}]}]},
+                  {"name": "vacuum", "group": "right", "actions": [{"name": "on", "steps": [{"wait_s": 0}]}]}]},
+    "routines": {"groups": ["left", "right"], "tools": ["gripper", "vacuum"]},
+}
+
+
+def test_tools_belong_to_their_group() -> None:
+    c = parse_routines(TWIN)
+    assert c.groups == {"left": 2, "right": 1} and c.tool_groups == {"gripper": "left", "vacuum": "right"}
+    assert c.warnings == ()
+    only_left = parse_routines({**TWIN, "routines": {"groups": ["left"], "tools": ["gripper", "vacuum"]}})
+    assert list(only_left.tools) == ["gripper"]
+    assert only_left.warnings == ("routines.tools[1]: tool 'vacuum' is on group 'right' (manual.tools), which "
+                                  "routines.groups does not offer (left); ignored",)
+
+
+def test_record_save_and_run_for_one_group_with_its_tools(tmp_path: Path) -> None:
+    r, robot, log, _ = make(tmp_path, cfg=parse_routines(TWIN))
+    robot.pose_answer = (True, "pose of right", [0.3], list(P1))
+    ok, _, pose = r.record("right", "", "pose", "")
+    assert ok and pose == Step(POSE, P1, (0.3,)) and robot.calls == [("get_pose", "right")]
+    assert r.record("right", "vacuum", "action", "on")[0]
+    assert r.record("right", "gripper", "action", "close") == (
+        False, "tool gripper is on group left, not right (a routine uses its group's tools: vacuum)", None)
+    assert r.save("bad", "right", "", [pose, Step(ACTION, tool="gripper", action="close")], False) == (
+        False, "step 2: tool gripper is on group left, not right (a routine uses its group's tools: vacuum)")
+    assert r.save("bad", "left", "vacuum", [pose], False) == (
+        False, "tool vacuum is on group right, not left (a routine uses its group's tools: gripper)")
+    assert r.save("suck", "right", "vacuum", [pose, Step(ACTION, action="on")], False)[0]
+    robot.calls.clear()
+    assert r.run("suck") == (True, "routine suck done")
+    assert robot.calls == [("move_pose", "right", P1, 0.0, 0.0), ("tool", "vacuum", "on")]

@@ -136,7 +136,7 @@ def test_record_save_run_stop_through_ros(cell: Cell) -> None:
 
     data_dir = cell.data_dir
     t_start = time.monotonic()
-    robot = Recorder("/cell/manual/state", RobotState)
+    robot = Recorder("/cell/manual/arm/state", RobotState)
     run_state = Recorder("/cell/routines/state", RoutineRunState)
     log = Recorder("/cell/routines/log", LogEntries)
     wait_for(lambda: robot.msg is not None and robot.msg.connected, 15, what="the driver connected")
@@ -282,7 +282,7 @@ def test_the_node_stops_a_running_routine_when_it_shuts_down(cell: Cell) -> None
     from cell_msgs.msg import RobotState
     from cell_msgs.srv import ListRoutines, MoveNamed, RunRoutine
 
-    robot = Recorder("/cell/manual/state", RobotState)
+    robot = Recorder("/cell/manual/arm/state", RobotState)
     r = rospy.ServiceProxy("/cell/manual/move_named", MoveNamed)(group="arm", name="home", speed=1.0, acceleration=1.5)
     assert r.success, r.message  # far from the routine's first pose: a long first move
     assert [x.name for x in rospy.ServiceProxy("/cell/routines/list", ListRoutines)().routines] == ["broken", "pick 2"]

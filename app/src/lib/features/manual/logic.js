@@ -10,9 +10,8 @@ import { commandGate } from '../../core/gate.js';
 
 export const FEATURE_ID = 'manual';
 
-/** ROS names of the driver (/cell/manual/...). */
+/** ROS names of the driver (/cell/manual/...). Each motion group has its own state topic: stateTopic(group). */
 export const NAMES = Object.freeze({
-  state: { topic: '/cell/manual/state', type: 'cell_msgs/RobotState' },
   jog: { topic: '/cell/manual/jog', type: 'cell_msgs/JogCommand' },
   groups: { service: '/cell/manual/groups', type: 'cell_msgs/GetMotionGroups' },
   getPose: { service: '/cell/manual/get_pose', type: 'cell_msgs/GetPose' },
@@ -22,6 +21,10 @@ export const NAMES = Object.freeze({
   tool: { service: '/cell/manual/tool', type: 'cell_msgs/ToolAction' },
   stop: { service: '/cell/manual/stop', type: 'std_srvs/Trigger' },
 });
+
+/** cell_msgs/RobotState of one motion group, 20 Hz. @param {string} group */
+export const stateTopic = (group) => `/cell/manual/${group}/state`;
+export const STATE_TYPE = 'cell_msgs/RobotState';
 
 /** The jog heartbeat: the driver stops ~200 ms after the last JogCommand, so 50 ms leaves room for 3 misses. */
 export const JOG_PERIOD_MS = 50;
@@ -88,7 +91,7 @@ export function fixed(v, digits) {
  */
 /** @typedef {{ name: string, positions: number[] }} NamedConfiguration */
 /** @typedef {{ name: string, joints: string[], configurations: NamedConfiguration[] }} MotionGroup */
-/** @typedef {{ name: string, actions: string[] }} ToolInfo */
+/** @typedef {{ name: string, actions: string[], group: string }} ToolInfo  group '' = the first group */
 /** @typedef {{ groups: MotionGroup[], tools: ToolInfo[], limits: Limits }} DriverSetup */
 
 /** @param {unknown} v */
@@ -128,8 +131,60 @@ export function normalizeSetup(resp) {
     }));
   const tools = (Array.isArray(resp?.tools) ? resp.tools : [])
     .filter((/** @type {any} */ t) => typeof t?.name === 'string' && t.name)
-    .map((/** @type {any} */ t) => ({ name: t.name, actions: strings(t.actions) }));
+    .map((/** @type {any} */ t) => ({ name: t.name, actions: strings(t.actions), group: typeof t.group === 'string' ? t.group : '' }));
   return { groups, tools, limits: normalizeLimits(resp?.limits) };
+}
+
+// ---- motion groups ----
+
+/**
+ * The motion groups of the cell file's manual section (/api/config `features.manual`), as the driver reports
+ * them: known before the driver answers (the state topic of the chosen group, the joint names).
+ * @param {any} section
+ * @returns {MotionGroup[]}
+ */
+export function sectionGroups(section) {
+  return (Array.isArray(section?.groups) ? section.groups : [])
+    .filter((/** @type {any} */ g) => typeof g?.name === 'string' && g.name)
+    .map((/** @type {any} */ g) => ({
+      name: g.name,
+      joints: strings(g.joints),
+      configurations: Object.entries(g.configurations && typeof g.configurations === 'object' ? g.configurations : {})
+        .map(([name, positions]) => ({ name, positions: Array.isArray(positions) ? positions.map(Number) : [] })),
+    }));
+}
+
+/**
+ * The group names the page offers: the driver's (what commands go to) once it answered, else the cell file's.
+ * @param {DriverSetup | null} setup @param {MotionGroup[]} fromSection
+ * @returns {string[]}
+ */
+export function groupChoices(setup, fromSection) {
+  const list = setup?.groups.length ? setup.groups : fromSection;
+  return list.map((g) => g.name);
+}
+
+/**
+ * The group shown: the remembered choice while it is one of the groups, else the first.
+ * @param {string[]} names @param {string | null | undefined} remembered
+ */
+export function chosenGroup(names, remembered) {
+  return remembered && names.includes(remembered) ? remembered : (names[0] ?? '');
+}
+
+/**
+ * The tools of one group. A tool's group: the driver's answer (ToolInfo.group), else the cell file's
+ * (manual.tools[].group), else the first group.
+ * @param {ToolInfo[]} tools @param {string} group @param {string} firstGroup
+ * @param {any} [section] the cell file's manual section
+ * @returns {ToolInfo[]}
+ */
+export function toolsOfGroup(tools, group, firstGroup, section = null) {
+  const fromCell = (/** @type {string} */ name) => {
+    const t = Array.isArray(section?.tools) ? section.tools.find((/** @type {any} */ x) => x?.name === name) : null;
+    return typeof t?.group === 'string' ? t.group : '';
+  };
+  return tools.filter((t) => (t.group || fromCell(t.name) || firstGroup) === group);
 }
 
 // ---- names ----
@@ -167,9 +222,17 @@ export function jogRows(mode, joints) {
   return joints.map((j, axis) => ({ axis, name: `J${axis + 1}`, detail: jointShortName(j) }));
 }
 
-/** "shoulder_pan_joint" -> "shoulder pan". @param {string} name */
+/** The UR joint names: a cell file's joint name ends with one of them ("left_shoulder_pan_joint"). */
+export const UR_JOINTS = Object.freeze(['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint', 'wrist_3_joint']);
+
+/**
+ * "shoulder_pan_joint" -> "shoulder pan"; "left_shoulder_pan_joint" -> "shoulder pan" (the group is shown already).
+ * @param {string} name
+ */
 export function jointShortName(name) {
-  return String(name ?? '').replace(/_joint$/, '').replace(/_/g, ' ');
+  const n = String(name ?? '');
+  const ur = UR_JOINTS.find((j) => n === j || n.endsWith(`_${j}`));
+  return (ur ?? n).replace(/_joint$/, '').replace(/_/g, ' ');
 }
 
 // ---- speeds ----

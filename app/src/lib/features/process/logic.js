@@ -123,6 +123,19 @@ export function needsStartConfirmation(v) {
   return !!v.startConfiguration && !v.atStart;
 }
 
+/**
+ * The question before a Start away from the start: one group ("home") or several ("left: home, right: home",
+ * the node's wording for a start configuration per group).
+ * @param {string} startConfiguration  the node's ProcessState.start_configuration
+ */
+export function startQuestion(startConfiguration) {
+  const s = String(startConfiguration ?? '').trim();
+  if (s.includes(':')) {
+    return `The robots are not all at their start configurations (${s}). The first moves go there from where the arms are now. Start anyway?`;
+  }
+  return `The robot is not at ${s || 'its start configuration'}. The first move goes there from where the arm is now. Start anyway?`;
+}
+
 /** @param {number} s seconds @returns {string} */
 export function formatSeconds(s) {
   if (!Number.isFinite(s) || s <= 0) return '–';

@@ -16,8 +16,12 @@ export const NAMES = Object.freeze({
   state: { topic: '/cell/routines/state', type: 'cell_msgs/RoutineRunState' },
   log: { topic: '/cell/routines/log', type: 'cell_msgs/LogEntries' },
   groups: { service: '/cell/manual/groups', type: 'cell_msgs/GetMotionGroups' },
-  robot: { topic: '/cell/manual/state', type: 'cell_msgs/RobotState' },
+  // The chosen group's driver state (its live TCP pose): /cell/manual/<group>/state, see robotTopic.
 });
+
+/** The driver state topic of a motion group (the live pose shown while teaching). @param {string} group */
+export const robotTopic = (group) => `/cell/manual/${group}/state`;
+export const ROBOT_TYPE = 'cell_msgs/RobotState';
 
 /** A routine run may take a while: the run call waits this long for its answer. */
 export const RUN_TIMEOUT_MS = 300_000;
@@ -141,6 +145,25 @@ export function toolChoices(allowed, groupsAnswer) {
   return allowed.map((name) => {
     const t = tools.find((/** @type {any} */ x) => x?.name === name);
     return { name, actions: Array.isArray(t?.actions) ? t.actions.map(String) : [] };
+  });
+}
+
+/**
+ * The tools a routine for `group` may use. A tool's group: the page's section (`tool_groups`, from the cell file),
+ * else the driver's answer (ToolInfo.group), else the cell's first group.
+ * @param {{ name: string, actions: string[] }[]} choices  from toolChoices
+ * @param {string} group
+ * @param {{ toolGroups?: Record<string, string>, groupsAnswer?: any, firstGroup?: string }} [o]
+ * @returns {{ name: string, actions: string[] }[]}
+ */
+export function toolsOfGroup(choices, group, { toolGroups = {}, groupsAnswer = null, firstGroup = '' } = {}) {
+  const driver = Array.isArray(groupsAnswer?.tools) ? groupsAnswer.tools : [];
+  const first = firstGroup || (Array.isArray(groupsAnswer?.groups) ? String(groupsAnswer.groups[0]?.name ?? '') : '');
+  return choices.filter((t) => {
+    const fromDriver = driver.find((/** @type {any} */ x) => x?.name === t.name)?.group;
+    const g = (toolGroups && typeof toolGroups[t.name] === 'string' && toolGroups[t.name])
+      || (typeof fromDriver === 'string' && fromDriver) || first;
+    return g === group;
   });
 }
 

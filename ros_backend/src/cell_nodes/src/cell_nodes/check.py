@@ -8,7 +8,9 @@ driver does not have, a parameter default outside its own range, duplicate modul
 start and is respawned forever (the process nodes stay up and refuse every Start). Here every node's own parser
 runs over the file, the same functions the nodes call in main():
 
-- manual_node: manual.config.parse_manual
+- manual_node: manual.config.parse_manual, then resolve_hosts (groups[].host, UR_HOSTS, UR_HOST of the environment
+  the check runs in) and plan_arms (one driver per host: the joints of one arm named alike, no joint name on two
+  arms, a tool's move_named steps on its own arm)
 - parameters_node: parameters.config.parse_parameters (ids, min <= max, each default within its own rules)
 - process_server, process_node: process.config.parse_process after substitute_parameters, with each parameter's
   default from the cell file (the nodes take the parameters CSV's values, which the Parameters page keeps valid)
@@ -26,6 +28,7 @@ No rospy import here: it runs without a ROS master.
 """
 from __future__ import annotations
 
+import os
 import sys
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Optional, Sequence
@@ -48,10 +51,11 @@ def _crash(section: str, who: str, e: Exception) -> str:
     return f"{section}: {who} cannot read this section ({type(e).__name__}: {e})"
 
 
-def check_manual(cell: Mapping[str, Any], report: Report) -> None:
-    from cell_nodes.manual.config import ConfigError, parse_manual
+def check_manual(cell: Mapping[str, Any], report: Report, environ: Optional[Mapping[str, str]] = None) -> None:
+    from cell_nodes.manual.config import ConfigError, parse_manual, plan_arms, resolve_hosts
     try:
-        parse_manual(cell.get("manual"))
+        config = parse_manual(cell.get("manual"))
+        plan_arms(config, resolve_hosts(cell.get("manual"), os.environ if environ is None else environ))
     except ConfigError as e:
         report.problems.append(str(e))
     except Exception as e:  # noqa: BLE001 - the node would die of it too

@@ -17,9 +17,16 @@ class ConfigError(ValueError):
     """The alarms section cannot be used (names the field: `alarms.force_limit_n: ...`)."""
 
 
+def default_robot_state_topic(group: str) -> str:
+    """The robot driver's state topic of a motion group."""
+    return f"/cell/manual/{group}/state"
+
+
 @dataclass(frozen=True)
 class AlarmsConfig:
-    robot_state_topic: str = "/cell/manual/state"
+    # (motion group, its cell_msgs/RobotState topic): every manual.groups entry, /cell/manual/<group>/state unless
+    # robot_state_topics names another topic for it.
+    robot_state_topics: tuple[tuple[str, str], ...] = ()
     fault_topics: tuple[str, ...] = ("/sim/faults",)
     wrench_topics: tuple[str, ...] = ()
     force_limit_n: Optional[float] = None       # None: no force supervision
@@ -33,6 +40,10 @@ class AlarmsConfig:
     mode_topic: str = "/cell/mode"
     set_mode_service: str = "/cell/set_mode"
     publish_period_s: float = 1.0
+
+    @property
+    def robot_groups(self) -> tuple[str, ...]:
+        return tuple(g for g, _ in self.robot_state_topics)
 
     def severity_for(self, alarm_id: str, default: int) -> int:
         for pattern, sev in self.severity:
@@ -75,8 +86,19 @@ def parse_alarms(cell: Mapping[str, Any]) -> AlarmsConfig:
     if not isinstance(section, Mapping):
         raise ConfigError(f"alarms: expected a mapping, got {section!r}")
     kw: dict[str, Any] = {}
-    if "robot_state_topic" in section:
-        kw["robot_state_topic"] = _topic(section["robot_state_topic"], "alarms.robot_state_topic")
+    manual = cell.get("manual") if isinstance(cell.get("manual"), Mapping) else {}
+    groups = [g["name"] for g in manual.get("groups") or [] if isinstance(g, Mapping) and isinstance(g.get("name"), str)]
+    overrides_topics = section.get("robot_state_topics") or {}
+    if not isinstance(overrides_topics, Mapping):
+        raise ConfigError(f"alarms.robot_state_topics: expected a mapping of motion group to topic, got "
+                          f"{overrides_topics!r}")
+    for group in overrides_topics:
+        if group not in groups:
+            raise ConfigError(f"alarms.robot_state_topics.{group}: not a motion group of the robot driver "
+                              f"(manual.groups: {', '.join(groups) or 'none'})")
+    kw["robot_state_topics"] = tuple(
+        (g, _topic(overrides_topics[g], f"alarms.robot_state_topics.{g}") if g in overrides_topics
+         else default_robot_state_topic(g)) for g in groups)
     if "modules_topic" in section:
         kw["modules_topic"] = _topic(section["modules_topic"], "alarms.modules_topic")
     if "fault_topics" in section:

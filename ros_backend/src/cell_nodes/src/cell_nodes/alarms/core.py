@@ -4,28 +4,37 @@ from __future__ import annotations
 
 from typing import Any, Iterable, Optional
 
-from .config import AlarmsConfig
+from .config import AlarmsConfig, default_robot_state_topic
 from .mode import ModeKeeper, ModeRequest
-from .sources import (ForceWatch, RobotInfo, SilenceWatch, fault_conditions, module_conditions, robot_conditions,
-                      wrench_force)
+from .sources import (ForceWatch, RobotInfo, SilenceWatch, combined_robot, fault_conditions, module_conditions,
+                      robot_alarm_id, robot_conditions, robot_text, wrench_force)
 from .status import SafetyStatus, overall
 from .table import ERROR, WARNING, Alarm, AlarmTable, Condition
+
+
+class _RobotWatch:
+    """One motion group's robot state source: its last modes, silence, and the start-up grace."""
+
+    def __init__(self, group: str, topic: str, config: AlarmsConfig, now: float, expected: bool) -> None:
+        self.group, self.topic = group, topic
+        self.info = RobotInfo()
+        self.silence = SilenceWatch(config.timeout_s, now if expected else None, config.startup_grace_s)
+        self.silent = False
+        # The driver's first connection after start is no "connection lost": not an alarm until the driver was
+        # connected once or the start-up grace is over.
+        self.ever_connected = False
+        self.held_back: Optional[Any] = None    # a disconnected state held back during the grace
 
 
 class Alarms:
     def __init__(self, config: AlarmsConfig, now: float) -> None:
         self.config = config
         self.table = AlarmTable()
-        self.robot = RobotInfo()
         self.keeper = ModeKeeper(config.alarm_mode)
-        self._robot_silence = SilenceWatch(config.timeout_s, now if config.robot_expected else None,
-                                           config.startup_grace_s)
-        self._robot_silent = False
-        # The driver's first connection after start is no "connection lost": not an alarm until the driver was
-        # connected once or the start-up grace is over.
         self._start = now
-        self._ever_connected = False
-        self._held_back: Optional[Any] = None   # a disconnected state held back during the grace
+        # Every motion group of the cell, each watched on its own state topic (robot.<group>.* alarms).
+        self._robots: dict[str, _RobotWatch] = {
+            g: _RobotWatch(g, topic, config, now, config.robot_expected) for g, topic in config.robot_state_topics}
         topics = config.wrench_topics if config.force_limit_n is not None else ()
         suffix = (lambda t: f":{t}") if len(topics) > 1 else (lambda t: "")
         self._force = {t: ForceWatch(t, config.force_limit_n or 0.0, config.force_clear or 0.0,
@@ -45,21 +54,34 @@ class Alarms:
         self._list_dirty |= changed
         return changed
 
-    def on_robot_state(self, state: Any, now: float) -> bool:
-        """cell_msgs/RobotState from the robot driver."""
-        self._robot_silence.heard(now)
-        return self._robot_state(state, now)
+    @property
+    def robot(self) -> RobotInfo:
+        """Every group's last reported modes, combined for SafetyStatus."""
+        return combined_robot([w.info for w in self._robots.values()])
 
-    def _robot_state(self, state: Any, now: float) -> bool:
-        self.robot, conditions = robot_conditions(state)
-        self._ever_connected |= self.robot.connected
-        self._held_back = None
-        if not self._ever_connected and now - self._start <= self.config.startup_grace_s:
-            self._held_back, conditions = state, []
-        changed = self._report("robot", conditions, now)
-        if self._robot_silent:
-            self._robot_silent = False
-            changed |= self._report("robot.silence", [], now)
+    def _watch(self, group: str) -> _RobotWatch:
+        w = self._robots.get(group)
+        if w is None:  # a group the cell file does not list: watched from its first message on
+            w = self._robots[group] = _RobotWatch(group, default_robot_state_topic(group), self.config, self._start,
+                                                  False)
+        return w
+
+    def on_robot_state(self, group: str, state: Any, now: float) -> bool:
+        """cell_msgs/RobotState of a motion group from the robot driver (/cell/manual/<group>/state)."""
+        w = self._watch(group)
+        w.silence.heard(now)
+        return self._robot_state(w, state, now)
+
+    def _robot_state(self, w: _RobotWatch, state: Any, now: float) -> bool:
+        w.info, conditions = robot_conditions(w.group, state)
+        w.ever_connected |= w.info.connected
+        w.held_back = None
+        if not w.ever_connected and now - self._start <= self.config.startup_grace_s:
+            w.held_back, conditions = state, []
+        changed = self._report(f"robot:{w.group}", conditions, now)
+        if w.silent:
+            w.silent = False
+            changed |= self._report(f"robot.silence:{w.group}", [], now)
         return changed
 
     def on_faults(self, topic: str, alarms: Iterable[Any], now: float) -> bool:
@@ -85,19 +107,8 @@ class Alarms:
     def tick(self, now: float) -> bool:
         """Periodic: sources that fell silent, and the active alarms' last-seen time."""
         changed = False
-        if self._held_back is not None and now - self._start > self.config.startup_grace_s:
-            changed |= self._robot_state(self._held_back, now)  # still never connected: now it counts
-        if not self._robot_silent and self._robot_silence.silent(now):
-            self._robot_silent = True
-            self._held_back = None
-            self.robot = RobotInfo()
-            changed |= self._report("robot", [], now)  # its last modes are not known to hold any more
-            heard = self._robot_silence.last is not None
-            for_how_long = (f"for {self.config.timeout_s:g} s" if heard
-                            else f"since the start ({self._robot_silence.grace:g} s)")
-            changed |= self._report("robot.silence", [Condition(
-                "robot.no_state", f"no robot state from the driver on {self.config.robot_state_topic} {for_how_long}",
-                ERROR, "robot")], now)
+        for w in self._robots.values():
+            changed |= self._robot_tick(w, now)
         for topic, silence in self._force_silence.items():
             if topic not in self._force_silent and silence.silent(now):
                 self._force_silent.add(topic)
@@ -108,6 +119,24 @@ class Alarms:
                     f"no wrist force reading on {topic} for {self.config.timeout_s:g} s: the force limit is not "
                     f"supervised", WARNING, "force")], now)
         self.table.touch(now)
+        return changed
+
+    def _robot_tick(self, w: _RobotWatch, now: float) -> bool:
+        changed = False
+        if w.held_back is not None and now - self._start > self.config.startup_grace_s:
+            changed |= self._robot_state(w, w.held_back, now)  # still never connected: now it counts
+        if not w.silent and w.silence.silent(now):
+            w.silent = True
+            w.held_back = None
+            w.info = RobotInfo()
+            changed |= self._report(f"robot:{w.group}", [], now)  # its last modes are not known to hold any more
+            heard = w.silence.last is not None
+            for_how_long = (f"for {self.config.timeout_s:g} s" if heard
+                            else f"since the start ({w.silence.grace:g} s)")
+            changed |= self._report(f"robot.silence:{w.group}", [Condition(
+                robot_alarm_id(w.group, "no_state"),
+                robot_text(w.group, f"no robot state from the driver on {w.topic} {for_how_long}"), ERROR,
+                "robot")], now)
         return changed
 
     # ------------------------------------------------------------------------------------------ commands

@@ -17,35 +17,51 @@ def field(obj: Any, name: str, default: Any = None) -> Any:
 
 
 # ---------------------------------------------------------------------------------------------- the robot driver
-# UR safety modes that are alarms: name -> (alarm id, severity, text). NORMAL is none.
+# Robot alarm ids are `robot.<group>.<kind>` (robot.arm.protective_stop, robot.left.no_state), one set per motion
+# group (its /cell/manual/<group>/state); texts start with "Robot <group>: ".
+# UR safety modes that are alarms: name -> (kind, severity, text). NORMAL is none.
 SAFETY_ALARMS: dict[str, tuple[str, int, str]] = {
-    "REDUCED": ("robot.reduced_mode", WARNING, "robot in reduced mode: the safety limits are lowered"),
-    "RECOVERY": ("robot.recovery", WARNING, "robot in recovery mode: move it back inside the safety limits"),
-    "PROTECTIVE_STOP": ("robot.protective_stop", ERROR, "protective stop: the robot stopped; clear the cause, "
-                                                        "then unlock it"),
-    "SAFEGUARD_STOP": ("robot.safeguard_stop", ERROR, "safeguard stop: a safeguard (door, light curtain) is open"),
-    "AUTOMATIC_MODE_SAFEGUARD_STOP": ("robot.safeguard_stop", ERROR,
-                                      "safeguard stop (automatic mode): a safeguard is open"),
-    "SYSTEM_THREE_POSITION_ENABLING_STOP": ("robot.safeguard_stop", ERROR,
+    "REDUCED": ("reduced_mode", WARNING, "reduced mode: the safety limits are lowered"),
+    "RECOVERY": ("recovery", WARNING, "recovery mode: move it back inside the safety limits"),
+    "PROTECTIVE_STOP": ("protective_stop", ERROR, "protective stop: the robot stopped; clear the cause, then unlock "
+                                                  "it"),
+    "SAFEGUARD_STOP": ("safeguard_stop", ERROR, "safeguard stop: a safeguard (door, light curtain) is open"),
+    "AUTOMATIC_MODE_SAFEGUARD_STOP": ("safeguard_stop", ERROR, "safeguard stop (automatic mode): a safeguard is open"),
+    "SYSTEM_THREE_POSITION_ENABLING_STOP": ("safeguard_stop", ERROR,
                                             "safeguard stop: the three-position enabling device was released"),
-    "SYSTEM_EMERGENCY_STOP": ("robot.emergency_stop", ERROR, "emergency stop from the cell (system emergency stop)"),
-    "ROBOT_EMERGENCY_STOP": ("robot.emergency_stop", ERROR, "emergency stop pressed on the robot (teach pendant)"),
-    "VIOLATION": ("robot.safety_violation", ERROR, "safety violation: the robot's safety system stopped it"),
-    "FAULT": ("robot.safety_fault", ERROR, "safety system fault: the robot's safety system stopped it"),
+    "SYSTEM_EMERGENCY_STOP": ("emergency_stop", ERROR, "emergency stop from the cell (system emergency stop)"),
+    "ROBOT_EMERGENCY_STOP": ("emergency_stop", ERROR, "emergency stop pressed on the robot (teach pendant)"),
+    "VIOLATION": ("safety_violation", ERROR, "safety violation: the robot's safety system stopped it"),
+    "FAULT": ("safety_fault", ERROR, "safety system fault: the robot's safety system stopped it"),
 }
 QUIET_SAFETY = ("", "NORMAL")
 # UR robot modes that are alarms while the controller link is up.
 ROBOT_MODE_ALARMS: dict[str, tuple[str, int, str]] = {
-    "NO_CONTROLLER": ("robot.arm_disconnected", ERROR, "the controller reports no robot arm (mode NO_CONTROLLER)"),
-    "DISCONNECTED": ("robot.arm_disconnected", ERROR, "the robot arm is not connected to its controller"),
-    "CONFIRM_SAFETY": ("robot.confirm_safety", WARNING, "the safety configuration must be confirmed on the pendant"),
-    "BOOTING": ("robot.booting", INFO, "the robot arm is booting"),
-    "POWER_OFF": ("robot.power_off", INFO, "the robot arm is powered off"),
-    "BACKDRIVE": ("robot.backdrive", WARNING, "the robot arm is in backdrive mode (brakes released by hand)"),
-    "UPDATING_FIRMWARE": ("robot.updating_firmware", WARNING, "the robot arm is updating its firmware"),
+    "NO_CONTROLLER": ("arm_disconnected", ERROR, "the controller reports no robot arm (mode NO_CONTROLLER)"),
+    "DISCONNECTED": ("arm_disconnected", ERROR, "the robot arm is not connected to its controller"),
+    "CONFIRM_SAFETY": ("confirm_safety", WARNING, "the safety configuration must be confirmed on the pendant"),
+    "BOOTING": ("booting", INFO, "the robot arm is booting"),
+    "POWER_OFF": ("power_off", INFO, "the robot arm is powered off"),
+    "BACKDRIVE": ("backdrive", WARNING, "the robot arm is in backdrive mode (brakes released by hand)"),
+    "UPDATING_FIRMWARE": ("updating_firmware", WARNING, "the robot arm is updating its firmware"),
 }
-STOP_STATUS = {"robot.emergency_stop": "emergency stop", "robot.protective_stop": "protective stop",
-               "robot.safeguard_stop": "safeguard stop"}
+# The kinds of robot alarm that name the overall status (docs: SafetyStatus.status), most urgent first.
+STOP_STATUS = {"emergency_stop": "emergency stop", "protective_stop": "protective stop",
+               "safeguard_stop": "safeguard stop"}
+
+
+def robot_alarm_id(group: str, kind: str) -> str:
+    return f"robot.{group}.{kind}"
+
+
+def robot_alarm_kind(alarm_id: str) -> str:
+    """`robot.<group>.<kind>` -> kind ("" for any other id). Group names have no dots (they are ROS names)."""
+    parts = alarm_id.split(".")
+    return parts[2] if len(parts) == 3 and parts[0] == "robot" else ""
+
+
+def robot_text(group: str, text: str) -> str:
+    return f"Robot {group}: {text}"
 
 
 @dataclass(frozen=True)
@@ -55,25 +71,47 @@ class RobotInfo:
     robot_mode: str = ""
 
 
-def robot_conditions(state: Any) -> tuple[RobotInfo, list[Condition]]:
-    """cell_msgs/RobotState (the driver's /cell/manual/state) -> what it reports and its alarms."""
+def robot_conditions(group: str, state: Any) -> tuple[RobotInfo, list[Condition]]:
+    """cell_msgs/RobotState of one motion group (the driver's /cell/manual/<group>/state) -> what it reports and
+    its alarms (ids robot.<group>.<kind>)."""
     connected = bool(field(state, "connected", False))
     safety = str(field(state, "safety_mode", "") or "")
     mode = str(field(state, "robot_mode", "") or "")
     if not connected:
         host = field(state, "controller", "") or "?"
-        return RobotInfo(False, "", ""), [Condition("robot.disconnected", f"robot controller at {host} is unreachable",
+        return RobotInfo(False, "", ""), [Condition(robot_alarm_id(group, "disconnected"),
+                                                    robot_text(group, f"robot controller at {host} is unreachable"),
                                                     ERROR, "robot")]
     out: list[Condition] = []
     if safety in SAFETY_ALARMS:
-        aid, sev, text = SAFETY_ALARMS[safety]
-        out.append(Condition(aid, text, sev, "robot"))
+        kind, sev, text = SAFETY_ALARMS[safety]
+        out.append(Condition(robot_alarm_id(group, kind), robot_text(group, text), sev, "robot"))
     elif safety not in QUIET_SAFETY:
-        out.append(Condition("robot.safety_mode", f"unexpected safety mode {safety}", WARNING, "robot"))
+        out.append(Condition(robot_alarm_id(group, "safety_mode"), robot_text(group, f"unexpected safety mode "
+                                                                                     f"{safety}"), WARNING, "robot"))
     if mode in ROBOT_MODE_ALARMS:
-        aid, sev, text = ROBOT_MODE_ALARMS[mode]
-        out.append(Condition(aid, text, sev, "robot"))
+        kind, sev, text = ROBOT_MODE_ALARMS[mode]
+        out.append(Condition(robot_alarm_id(group, kind), robot_text(group, text), sev, "robot"))
     return RobotInfo(True, safety, mode), out
+
+
+def combined_robot(infos: Sequence[RobotInfo]) -> RobotInfo:
+    """One RobotInfo for SafetyStatus from every group's: connected when every group's controller is; the first
+    safety mode that is not NORMAL (else "" when a group's is unknown, else NORMAL); the first robot mode that is
+    not RUNNING likewise. One group: its own."""
+    if not infos:
+        return RobotInfo()
+    if len(infos) == 1:
+        return infos[0]
+
+    def pick(values: list[str], quiet: str) -> str:
+        odd = next((v for v in values if v and v != quiet), None)
+        if odd is not None:
+            return odd
+        return "" if any(not v for v in values) else quiet
+
+    return RobotInfo(all(i.connected for i in infos), pick([i.safety_mode for i in infos], "NORMAL"),
+                     pick([i.robot_mode for i in infos], "RUNNING"))
 
 
 # ---------------------------------------------------------------------------------------------- device faults

@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
-from .sources import STOP_STATUS, RobotInfo
+from .sources import STOP_STATUS, RobotInfo, robot_alarm_kind
 from .table import ERROR, WARNING, Alarm
 
 # Most urgent first. A robot stop names the status even if the cell file lowered that alarm's severity.
@@ -24,11 +24,12 @@ class SafetyStatus:
 
 
 def overall(alarms: Sequence[Alarm], robot: RobotInfo) -> SafetyStatus:
-    """`alarms` in list order (AlarmTable.alarms(): active first, most severe first, newest first)."""
+    """`alarms` in list order (AlarmTable.alarms(): active first, most severe first, newest first); `robot`: every
+    group's modes combined (sources.combined_robot). A stop of any group's robot names the status."""
     active = [a for a in alarms if a.active]
     highest = max((a.severity for a in active), default=-1)
-    ids = {a.id for a in active}
-    status = next((STOP_STATUS[i] for i in STOP_STATUS if i in ids), None)
+    kinds = {robot_alarm_kind(a.id) for a in active}
+    status = next((STOP_STATUS[k] for k in STOP_STATUS if k in kinds), None)
     if status is None:
         status = "fault" if highest >= ERROR else "warning" if highest == WARNING else "normal"
     text = active[0].text if active else "no active alarm"

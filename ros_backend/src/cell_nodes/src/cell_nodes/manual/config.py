@@ -3,12 +3,22 @@ this module only raises on what the driver cannot work with, naming the field)."
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional, Sequence, Union
 
-# The UR joint names, in the controller's order (RTDE actual_q). /joint_states uses them.
+# The UR joint names, in the controller's order (RTDE actual_q). A cell file's joint name ends with one of them
+# (`shoulder_pan_joint`, `left_shoulder_pan_joint`): that gives its index; /joint_states carries the cell's names.
 UR_JOINTS: tuple[str, ...] = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
                               "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
+DEFAULT_HOST = "127.0.0.1"
+# A group name is part of its topics' names (/cell/manual/<group>/state): a ROS name segment.
+GROUP_NAME = re.compile(r"[a-z][a-z0-9_]*")
+# manual.groups[].host and UR_HOSTS: an IPv4 address or a host name (its last label not all digits); the same
+# pattern as config/features/manual.schema.json.
+HOST = re.compile(r"(?:((25[0-5]|2[0-4][0-9]|1[0-9][0-9]|[1-9]?[0-9])\.){3}(25[0-5]|2[0-4][0-9]|1[0-9][0-9]|[1-9]?[0-9])"
+                  r"|(?=.{1,253}$)([A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?\.)*(?![0-9]+$)"
+                  r"[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?)")
 
 
 class ConfigError(ValueError):
@@ -18,9 +28,10 @@ class ConfigError(ValueError):
 @dataclass(frozen=True)
 class Group:
     name: str
-    joints: tuple[str, ...]
+    joints: tuple[str, ...]                        # the cell file's names (each ends with a UR joint name)
     indices: tuple[int, ...]                       # each joint's index in the robot's joint vector
     configurations: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    host: Optional[str] = None                     # manual.groups[].host; None: UR_HOST (see resolve_hosts)
 
 
 @dataclass(frozen=True)
@@ -60,6 +71,7 @@ class ToolAction:
 class Tool:
     name: str
     actions: dict[str, ToolAction]
+    group: str = ""                 # the group whose controller's IO drives it (default: the first group)
 
 
 @dataclass(frozen=True)
@@ -104,26 +116,67 @@ def _step(raw: Any, where: str) -> Step:
     raise ConfigError(f"{where}: unknown step (digital_out, wait_s, wait_input or move_named)")
 
 
+def ur_joint_index(name: Any, robot_joints: Sequence[str] = UR_JOINTS) -> Optional[int]:
+    """The index of the robot joint a cell file's joint name ends with (`left_elbow_joint` -> 2), else None."""
+    if not isinstance(name, str):
+        return None
+    return next((i for i, j in enumerate(robot_joints) if name.endswith(j)), None)
+
+
+def is_host(value: Any) -> bool:
+    """An IPv4 address or a host name (the schema's rule for manual.groups[].host and UR_HOSTS)."""
+    return isinstance(value, str) and HOST.fullmatch(value) is not None
+
+
 def parse_manual(section: Optional[Mapping[str, Any]], robot_joints: Sequence[str] = UR_JOINTS) -> ManualConfig:
-    """Read the manual section; group joints must be robot joints and configurations must fit their group."""
+    """Read the manual section; each group joint must name a robot joint (by its ending), once per group, and
+    configurations must fit their group; a tool's group must be a group."""
     section = section or {}
     groups: dict[str, Group] = {}
     for i, g in enumerate(section.get("groups") or []):
         where = f"manual.groups[{i}]"
+        if not isinstance(g, dict):
+            raise ConfigError(f"{where}: expected a mapping {{name, joints, configurations, host}}")
+        name = g.get("name")
+        if not isinstance(name, str) or not GROUP_NAME.fullmatch(name):
+            raise ConfigError(f"{where}.name: expected lower-case letters, digits and _ starting with a letter (it "
+                              f"is part of the group's topic names), got {name!r}")
+        if name in groups:
+            raise ConfigError(f"{where}.name: {name!r} is used twice")
+        host = g.get("host")
+        if host is not None and not is_host(host):
+            raise ConfigError(f"{where}.host: expected a host name or an IPv4 address, got {host!r}")
         joints = tuple(g.get("joints") or ())
-        indices = []
+        if not joints:
+            raise ConfigError(f"{where}.joints: expected at least one joint")
+        indices: list[int] = []
         for k, j in enumerate(joints):
-            if j not in robot_joints:
-                raise ConfigError(f"{where}.joints[{k}]: {j!r} is not a joint of the robot ({', '.join(robot_joints)})")
-            indices.append(list(robot_joints).index(j))
+            index = ur_joint_index(j, robot_joints)
+            if index is None:
+                raise ConfigError(f"{where}.joints[{k}]: {j!r} is not a joint of the robot (a joint name ends with "
+                                  f"one of {', '.join(robot_joints)})")
+            if index in indices:
+                raise ConfigError(f"{where}.joints[{k}]: {j!r} is the same robot joint ({robot_joints[index]}) as "
+                                  f"joints[{indices.index(index)}]")
+            indices.append(index)
         configs: dict[str, tuple[float, ...]] = {}
-        for name, values in (g.get("configurations") or {}).items():
-            if len(values) != len(joints):
-                raise ConfigError(f"{where}.configurations.{name}: {len(values)} values for {len(joints)} joints")
-            configs[name] = tuple(_number(v, f"{where}.configurations.{name}", positive=False) for v in values)
-        groups[g["name"]] = Group(g["name"], joints, tuple(indices), configs)
+        for cname, values in (g.get("configurations") or {}).items():
+            if not isinstance(values, (list, tuple)) or len(values) != len(joints):
+                count = len(values) if isinstance(values, (list, tuple)) else "no list of"
+                raise ConfigError(f"{where}.configurations.{cname}: {count} values for {len(joints)} joints")
+            configs[cname] = tuple(_number(v, f"{where}.configurations.{cname}", positive=False) for v in values)
+        groups[name] = Group(name, joints, tuple(indices), configs, host)
     tools: dict[str, Tool] = {}
+    first_group = next(iter(groups), "")
     for i, t in enumerate(section.get("tools") or []):
+        if not isinstance(t, dict) or not isinstance(t.get("name"), str):
+            raise ConfigError(f"manual.tools[{i}]: expected {{name, actions, group}}")
+        group = t.get("group", first_group)
+        if "group" in t and (not isinstance(group, str) or group not in groups):
+            raise ConfigError(f"manual.tools[{i}].group: {group!r} is not a motion group (manual.groups: "
+                              f"{', '.join(groups) or 'none'})")
+        if not group:
+            raise ConfigError(f"manual.tools[{i}]: a tool needs a motion group (manual.groups is empty)")
         actions: dict[str, ToolAction] = {}
         for k, a in enumerate(t.get("actions") or []):
             where = f"manual.tools[{i}].actions[{k}]"
@@ -135,8 +188,120 @@ def parse_manual(section: Optional[Mapping[str, Any]], robot_joints: Sequence[st
                                                      or s.configuration not in groups[s.group].configurations):
                     raise ConfigError(f"{where}.steps[{n}]: no configuration {s.configuration!r} in group {s.group!r}")
             actions[a["name"]] = ToolAction(a["name"], steps)
-        tools[t["name"]] = Tool(t["name"], actions)
+        if t["name"] in tools:
+            raise ConfigError(f"manual.tools[{i}].name: {t['name']!r} is used twice")
+        tools[t["name"]] = Tool(t["name"], actions, group)
     limits = {k: _number(section[k], f"manual.{k}") for k in
               ("default_speed", "default_acceleration", "max_speed", "max_acceleration", "max_tcp_speed",
                "max_tcp_acceleration") if section.get(k) is not None}
     return ManualConfig(groups, tools, limits)
+
+
+# ---------------------------------------------------------------------------------------------- hosts and arms
+def default_host(environ: Mapping[str, str]) -> str:
+    return str(environ.get("UR_HOST") or "").strip() or DEFAULT_HOST
+
+
+def resolve_hosts(section: Optional[Mapping[str, Any]], environ: Mapping[str, str]) -> dict[str, str]:
+    """{group: the address of the UR controller that moves it}, in the cell file's group order.
+
+    A group's `host`, else UR_HOST (else 127.0.0.1); UR_HOSTS (`<group>=<host>[,<group>=<host>...]`) overrides it
+    per group, so several stacks of one cell run side by side. Groups with the same host belong to the same arm.
+    Raises ConfigError for a malformed UR_HOSTS, one naming a group the cell does not have, or a bad host.
+    (The BFF's bff/src/core/config/hosts.js resolveHosts is the same rule in JavaScript.)"""
+    section = section or {}
+    fallback = default_host(environ)
+    hosts: dict[str, str] = {}
+    for i, g in enumerate(section.get("groups") or []):
+        if not isinstance(g, Mapping) or not isinstance(g.get("name"), str):
+            continue
+        host = g.get("host")
+        if host is not None and not is_host(host):
+            raise ConfigError(f"manual.groups[{i}].host: expected a host name or an IPv4 address, got {host!r}")
+        hosts[g["name"]] = host if host is not None else fallback
+    if not is_host(fallback) and any(h == fallback for h in hosts.values()):
+        raise ConfigError(f"UR_HOST: expected a host name or an IPv4 address, got {fallback!r}")
+    for entry in str(environ.get("UR_HOSTS") or "").split(","):
+        entry = entry.strip()
+        if not entry:
+            continue
+        group, sep, host = (x.strip() for x in entry.partition("="))
+        if not sep or not group or not host:
+            raise ConfigError(f"UR_HOSTS: expected <group>=<host>[,<group>=<host>...], got {entry!r}")
+        if group not in hosts:
+            raise ConfigError(f"UR_HOSTS: {group!r} is not a motion group of this cell (manual.groups: "
+                              f"{', '.join(hosts) or 'none'})")
+        if not is_host(host):
+            raise ConfigError(f"UR_HOSTS: {group}={host}: expected a host name or an IPv4 address")
+        hosts[group] = host
+    return hosts
+
+
+@dataclass(frozen=True)
+class Arm:
+    """One UR controller (one driver instance): the groups whose resolved host is `host`, and their tools."""
+    host: str
+    groups: tuple[str, ...]
+    tools: tuple[str, ...]
+    joint_names: tuple[str, ...]    # /joint_states names, one per robot joint in UR order
+
+    def config(self, cell: ManualConfig) -> ManualConfig:
+        """The part of the cell's manual section this arm's driver works with."""
+        return ManualConfig({g: cell.groups[g] for g in self.groups}, {t: cell.tools[t] for t in self.tools},
+                            cell.limits)
+
+
+def plan_arms(config: ManualConfig, hosts: Mapping[str, str],
+              robot_joints: Sequence[str] = UR_JOINTS) -> list[Arm]:
+    """Group the motion groups by their resolved host (first appearance first). Each arm's /joint_states names
+    are its groups' joint names; a robot joint that no group names gets the arm's prefix (the part of its first
+    joint name before the UR name; "" in the demo cell) + the UR name. Raises ConfigError when groups of one arm
+    name one joint differently, when two arms would publish a joint under the same name, or when a tool's
+    move_named step moves a group of another arm."""
+    by_host: dict[str, list[str]] = {}
+    for name in config.groups:
+        by_host.setdefault(hosts.get(name) or DEFAULT_HOST, []).append(name)
+    order = list(config.groups)
+    arms: list[Arm] = []
+    owner: dict[str, tuple[str, str]] = {}          # joint name -> (host, group), over every arm
+    for host, names in by_host.items():
+        named: dict[int, tuple[str, str]] = {}     # robot joint index -> (name, group)
+        for gname in names:
+            g = config.groups[gname]
+            for k, (joint, index) in enumerate(zip(g.joints, g.indices)):
+                if index in named and named[index][0] != joint:
+                    raise ConfigError(
+                        f"manual.groups[{order.index(gname)}].joints[{k}]: {joint!r} is robot joint "
+                        f"{robot_joints[index]} of the arm at {host}, which group {named[index][1]} calls "
+                        f"{named[index][0]!r}: groups of one arm name its joints alike")
+                named.setdefault(index, (joint, gname))
+        first = config.groups[names[0]]
+        prefix = first.joints[0][:len(first.joints[0]) - len(robot_joints[first.indices[0]])]
+        joint_names = tuple(named[i][0] if i in named else prefix + j for i, j in enumerate(robot_joints))
+        # The names the groups give first, then the ones made up for joints no group names.
+        for i in sorted(range(len(joint_names)), key=lambda k: k not in named):
+            joint = joint_names[i]
+            if joint in owner and owner[joint][0] != host:
+                other_host, other_group = owner[joint]
+                if i in named:
+                    raise ConfigError(
+                        f"manual.groups[{order.index(named[i][1])}]: joint name {joint!r} is also a joint of the arm "
+                        f"at {other_host} (group {other_group}): /joint_states would mix the two arms; give each "
+                        f"arm's joints their own prefix (left_shoulder_pan_joint, right_shoulder_pan_joint, ...)")
+                raise ConfigError(
+                    f"manual.groups[{order.index(names[0])}]: robot joint {robot_joints[i]} of the arm at {host} is in "
+                    f"none of its groups and would be published as {joint!r}, a joint of the arm at {other_host} "
+                    f"(group {other_group}): give each arm's joints their own prefix")
+            owner.setdefault(joint, (host, named[i][1] if i in named else names[0]))
+        tools = tuple(t.name for t in config.tools.values() if t.group in names)
+        for ti, t in enumerate(config.tools.values()):
+            if t.name not in tools:
+                continue
+            for a_i, action in enumerate(t.actions.values()):
+                for n, step in enumerate(action.steps):
+                    if isinstance(step, MoveNamedStep) and step.group not in names:
+                        raise ConfigError(
+                            f"manual.tools[{ti}].actions[{a_i}].steps[{n}]: group {step.group!r} is moved by the "
+                            f"controller at {hosts.get(step.group)}, not by the tool's ({t.group}) at {host}")
+        arms.append(Arm(host, tuple(names), tools, joint_names))
+    return arms

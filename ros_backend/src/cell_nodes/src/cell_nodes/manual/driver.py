@@ -784,10 +784,7 @@ class ManualDriver:
             if self._jog.active is None or not cmd.same_motion(self._jog.active):
                 self._control()  # may upload the control script: not while holding the command lock
         except Refused as e:
-            if self._jog.active is not None:  # a bad or refused command while jogging: stop, never carry on
-                self._stop_jog(f"jog refused: {e}")
-            else:
-                self._set_message(f"jog refused: {e}")
+            self.refuse_jog(str(e))
             return
         with self._cmd_lock:
             if self._motion in (MOVING, TOOL):
@@ -801,6 +798,14 @@ class ManualDriver:
                 self._jog.clear()
                 self._set_idle(f"jog refused: {e}")
         self.on_change()
+
+    def refuse_jog(self, why: str) -> None:
+        """A JogCommand that cannot be carried out: a running jog stops (never carry on after a bad or refused
+        command), and the state's message says why. The cell driver also calls it for a group no arm has."""
+        if self._jog.active is not None:
+            self._stop_jog(f"jog refused: {why}")
+        else:
+            self._set_message(f"jog refused: {why}")
 
     def _start_jog(self, cmd: Jog, g: Group) -> None:
         """Caller holds _cmd_lock. Sends the new speed at once: it replaces the running jog's."""

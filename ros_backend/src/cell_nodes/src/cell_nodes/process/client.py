@@ -75,7 +75,7 @@ class ProcessClient:
         self.log = LogBook()
         self.ready = False
         self.mode: Optional[str] = None
-        self.joints: Optional[list[float]] = None
+        self.joints: dict[str, list[float]] = {}     # group -> its arm's joint positions (RobotState)
         self.dry_run = False
         self.next_cycle = 1
         self.run: Optional[RunRequest] = None        # the goal sent and not ended yet
@@ -109,19 +109,27 @@ class ProcessClient:
     def on_mode(self, mode: str) -> None:
         self.mode = mode
 
-    def on_joints(self, positions: Sequence[float]) -> None:
-        self.joints = list(positions)
+    def on_joints(self, positions: Sequence[float], group: Optional[str] = None) -> None:
+        """The joint positions of a group's arm (RobotState.joint_positions of /cell/manual/<group>/state);
+        group None: process.group."""
+        if group is None:
+            group = self.config.group if self.config else ""
+        self.joints[group] = list(positions)
 
     def at_start(self) -> bool:
-        """The robot stands at start_configuration (every joint of the group within the tolerance). True when the
-        section names none (nothing to confirm); False while the joints are unknown."""
+        """Every group of start_configuration stands at its configuration (each of its joints within the
+        tolerance). True when the section names none (nothing to confirm); False while a group's joints are
+        unknown."""
         cfg = self.config
-        if cfg is None or not cfg.start_configuration:
+        if cfg is None or not cfg.start_targets:
             return True
-        if self.joints is None or not cfg.start_indices or max(cfg.start_indices) >= len(self.joints):
-            return False
-        return all(abs(self.joints[i] - v) <= cfg.start_tolerance for i, v in zip(cfg.start_indices,
-                                                                                  cfg.start_joints))
+        for t in cfg.start_targets:
+            q = self.joints.get(t.group)
+            if q is None or not t.indices or max(t.indices) >= len(q):
+                return False
+            if not all(abs(q[i] - v) <= cfg.start_tolerance for i, v in zip(t.indices, t.joints)):
+                return False
+        return True
 
     # ------------------------------------------------------------------------------------------- commands
     def _refusal(self) -> Optional[str]:

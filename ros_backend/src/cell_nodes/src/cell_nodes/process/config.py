@@ -9,17 +9,22 @@ Step syntax (one kind per step; every step may add `text:` to replace its genera
   { move_relative: [dx, dy, dz, rx, ry, rz], frame?: base|tool, note?, speed?, ... }  "Move relative z +0.1 m"
   { move_pose: [x, y, z, rx, ry, rz], note?, ... }                                    "Move to pose (x .., y .., z ..)"
   { move_pose: <pose table>, offset?: [6 numbers], note?: approach, ... }             "Move to part 2 (approach)"
-  { tool: gripper, action: close }                                                    "Gripper close"
+  { tool: gripper, action: close, group?: arm }                                       "Gripper close"
   { wait_s: 0.5 }                                                                     "Wait 0.5 s"
   { wait_topic: /x, field: data, equals|above|below: value, timeout_s?: 10 }          "Wait for /x data = true"
   { routine: <saved routine name> }                                                   "Run routine pick2"
 A pose table's entry for cycle c is entry (c - 1) mod its length; its 1-based number shows in the text.
+Move steps run on their `group` (default process.group); a tool step on its tool's group (manual.tools[].group: the
+driver routes it there; a step's own `group:` must be that one). `start_configuration` is a configuration name of
+process.group or a mapping {group: configuration}: at_start when every listed group is there.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional, Sequence, Union
+
+from cell_nodes.manual.config import UR_JOINTS, ur_joint_index
 
 DEFAULT_ACTION = "/cell/process/run"
 DEFAULT_GROUP = "arm"
@@ -74,6 +79,7 @@ class Tool:
     tool: str
     action: str
     text: str = ""
+    group: str = ""         # the tool's motion group (manual.tools[].group): the arm the driver runs it on
 
 
 @dataclass(frozen=True)
@@ -116,15 +122,23 @@ class StatusField:
 
 
 @dataclass(frozen=True)
+class StartTarget:
+    """One group of the start configuration: its configuration's joint values and their indices in the robot's
+    joint vector (RobotState.joint_positions of /cell/manual/<group>/state)."""
+    group: str
+    configuration: str
+    indices: tuple[int, ...] = ()   # empty when the cell has no manual section (at_start is then never true)
+    joints: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
 class ProcessConfig:
     operations: tuple[Operation, ...]
     action: str = DEFAULT_ACTION
     group: str = DEFAULT_GROUP
     poses: Mapping[str, tuple[tuple[float, ...], ...]] = field(default_factory=dict)
-    start_configuration: str = ""
-    # The start configuration's joint values and their indices in the robot's joint vector (from manual:).
-    start_joints: tuple[float, ...] = ()
-    start_indices: tuple[int, ...] = ()
+    start_configuration: str = ""   # as the state shows it: "home", or "left: home, right: home" for a mapping
+    start_targets: tuple[StartTarget, ...] = ()   # every group listed, with its joint values (from manual:)
     start_tolerance: float = DEFAULT_START_TOLERANCE
     joint_speed: float = 0.0
     joint_acceleration: float = 0.0
@@ -136,6 +150,11 @@ class ProcessConfig:
     @property
     def names(self) -> list[str]:
         return [o.name for o in self.operations]
+
+    @property
+    def start_groups(self) -> tuple[str, ...]:
+        """The groups whose state topics at_start follows."""
+        return tuple(t.group for t in self.start_targets)
 
 
 # ------------------------------------------------------------------------------------------------ helpers
@@ -181,12 +200,15 @@ class _Manual:
         self.present = bool(section)
         self.groups: dict[str, tuple[list[str], dict[str, list[float]]]] = {}
         self.tools: dict[str, list[str]] = {}
+        self.tool_groups: dict[str, str] = {}
         for g in (section or {}).get("groups") or []:
             if isinstance(g, dict) and isinstance(g.get("name"), str):
                 self.groups[g["name"]] = (list(g.get("joints") or []), dict(g.get("configurations") or {}))
+        first = next(iter(self.groups), "")
         for t in (section or {}).get("tools") or []:
             if isinstance(t, dict) and isinstance(t.get("name"), str):
                 self.tools[t["name"]] = [a.get("name") for a in t.get("actions") or [] if isinstance(a, dict)]
+                self.tool_groups[t["name"]] = str(t.get("group") or first)
 
     def check_group(self, group: str, where: str) -> None:
         if self.present and group not in self.groups:
@@ -209,8 +231,7 @@ class _Manual:
                               f"(it has: {', '.join(self.tools[tool]) or 'none'})")
 
 
-ROBOT_JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
-                "wrist_3_joint")
+ROBOT_JOINTS = UR_JOINTS
 
 
 # ------------------------------------------------------------------------------------------------ steps
@@ -262,11 +283,17 @@ def parse_step(raw: Any, where: str, group: str, poses: Mapping[str, Any], manua
         return MovePose(_six(target, f"{where}.move_pose", "a pose (or the name of a pose table)"), "", offset,
                         motion, note, text)
     if kind == "tool":
-        _check_keys(raw, where, kind, ("action", "text"))
+        _check_keys(raw, where, kind, ("action", "group", "text"))
         tool = _name(raw["tool"], f"{where}.tool")
         action = _name(raw.get("action"), f"{where}.action")
         manual.check_tool(tool, action, where)
-        return Tool(tool, action, text)
+        own = manual.tool_groups.get(tool)
+        if "group" in raw:
+            g = _name(raw["group"], f"{where}.group")
+            manual.check_group(g, f"{where}.group")
+            if own and g != own:
+                raise ConfigError(f"{where}.group: tool {tool} is on group {own} (manual.tools), not {g}")
+        return Tool(tool, action, text, own or (_name(raw["group"], f"{where}.group") if "group" in raw else group))
     if kind == "wait_s":
         _check_keys(raw, where, kind, ("text",))
         return WaitTime(_number(raw["wait_s"], f"{where}.wait_s", minimum=0), text)
@@ -338,17 +365,7 @@ def parse_process(section: Optional[Mapping[str, Any]], manual_section: Optional
         operations.append(Operation(name, tuple(parse_step(s, f"{where}.steps[{k}]", group, poses, manual)
                                                 for k, s in enumerate(steps))))
 
-    start = section.get("start_configuration") or ""
-    start_joints: tuple[float, ...] = ()
-    start_indices: tuple[int, ...] = ()
-    if start:
-        start = _name(start, "process.start_configuration")
-        manual.check_configuration(group, start, "process.start_configuration")
-        if group in manual.groups:
-            joints, configs = manual.groups[group]
-            if all(j in robot_joints for j in joints) and len(configs.get(start) or []) == len(joints):
-                start_indices = tuple(list(robot_joints).index(j) for j in joints)
-                start_joints = tuple(float(v) for v in configs[start])
+    start_text, targets = _start_configuration(section.get("start_configuration"), group, manual, robot_joints)
 
     fields: list[StatusField] = []
     for i, f in enumerate(section.get("status_fields") or []):
@@ -362,14 +379,48 @@ def parse_process(section: Optional[Mapping[str, Any]], manual_section: Optional
         return _number(section[key], f"process.{key}", positive=positive, minimum=0) if key in section else 0.0
 
     return ProcessConfig(
-        operations=tuple(operations), action=action, group=group, poses=poses, start_configuration=start,
-        start_joints=start_joints, start_indices=start_indices,
+        operations=tuple(operations), action=action, group=group, poses=poses, start_configuration=start_text,
+        start_targets=targets,
         start_tolerance=opt("start_tolerance") or DEFAULT_START_TOLERANCE,
         joint_speed=opt("joint_speed"), joint_acceleration=opt("joint_acceleration"), tcp_speed=opt("tcp_speed"),
         tcp_acceleration=opt("tcp_acceleration"),
         dry_run_step_s=opt("dry_run_step_s", positive=False) if "dry_run_step_s" in section
         else DEFAULT_DRY_RUN_STEP_S,
         status_fields=tuple(fields))
+
+
+def _start_configuration(raw: Any, group: str, manual: _Manual,
+                         robot_joints: Sequence[str]) -> tuple[str, tuple[StartTarget, ...]]:
+    """`start_configuration`: a configuration name of process.group, or {group: configuration, ...}. Returns the
+    text the state shows and one target per group."""
+    if raw is None or raw == "":
+        return "", ()
+    where = "process.start_configuration"
+    if isinstance(raw, Mapping):
+        if not raw:
+            raise ConfigError(f"{where}: expected a configuration name or a mapping {{group: configuration}} with "
+                              f"at least one group")
+        wanted = [(_name(g, where), _name(name, f"{where}.{g}"), f"{where}.{g}") for g, name in raw.items()]
+        for g, _, at in wanted:
+            manual.check_group(g, at)
+    else:
+        wanted = [(group, _name(raw, where), where)]
+    targets = []
+    for g, name, at in wanted:
+        manual.check_configuration(g, name, at)
+        indices: tuple[int, ...] = ()
+        joints: tuple[float, ...] = ()
+        if g in manual.groups:
+            names, configs = manual.groups[g]
+            found = [ur_joint_index(j, robot_joints) for j in names]
+            values = configs.get(name) or []
+            if names and all(i is not None for i in found) and len(values) == len(names):
+                indices = tuple(i for i in found if i is not None)
+                joints = tuple(float(v) for v in values)
+        targets.append(StartTarget(g, name, indices, joints))
+    text = targets[0].configuration if not isinstance(raw, Mapping) else \
+        ", ".join(f"{t.group}: {t.configuration}" for t in targets)
+    return text, tuple(targets)
 
 
 def substitute_parameters(section: Any, values: Mapping[str, Any], where: str = "process") -> Any:

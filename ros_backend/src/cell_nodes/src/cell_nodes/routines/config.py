@@ -20,6 +20,7 @@ class RoutinesConfig:
     directory: str                                   # relative to DATA_DIR
     groups: dict[str, int]                           # offered motion group -> its number of joints
     tools: dict[str, tuple[str, ...]]                # offered tool -> its action names (manual.tools)
+    tool_groups: dict[str, str] = field(default_factory=dict)  # offered tool -> its motion group (manual.tools)
     speed: float = 0.0                               # m/s for pose steps; 0: the driver's default
     acceleration: float = 0.0                        # m/s^2; 0: the driver's default
     warnings: tuple[str, ...] = field(default=())    # what was dropped from the section, and why
@@ -27,8 +28,9 @@ class RoutinesConfig:
     def group_names(self) -> str:
         return ", ".join(self.groups) or "none"
 
-    def tool_names(self) -> str:
-        return ", ".join(self.tools) or "none"
+    def tool_names(self, group: str = "") -> str:
+        """The offered tools (of `group` when given)."""
+        return ", ".join(t for t in self.tools if not group or self.tool_groups.get(t) == group) or "none"
 
 
 def _names(raw: Any) -> list[str]:
@@ -56,7 +58,8 @@ def check_directory(directory: Any) -> str:
 
 def parse_routines(cell: Mapping[str, Any]) -> RoutinesConfig:
     """Read `routines:` against `manual:`. Absent `groups`: every motion group; absent `tools`: none (the BFF's
-    view gives the page the same)."""
+    view gives the page the same). A tool belongs to its manual.tools[].group (default the first group); a
+    routine uses the tools of its own group only."""
     section: Mapping[str, Any] = cell.get("routines") or {}
     manual: Mapping[str, Any] = cell.get("manual") or {}
     warnings: list[str] = []
@@ -66,10 +69,13 @@ def parse_routines(cell: Mapping[str, Any]) -> RoutinesConfig:
         if isinstance(g, dict) and isinstance(g.get("name"), str):
             manual_groups[g["name"]] = len(g.get("joints") or [])
     manual_tools: dict[str, tuple[str, ...]] = {}
+    manual_tool_groups: dict[str, str] = {}
+    first_group = next(iter(manual_groups), "")
     for t in manual.get("tools") or []:
         if isinstance(t, dict) and isinstance(t.get("name"), str):
             manual_tools[t["name"]] = tuple(a["name"] for a in t.get("actions") or []
                                             if isinstance(a, dict) and isinstance(a.get("name"), str))
+            manual_tool_groups[t["name"]] = t["group"] if isinstance(t.get("group"), str) else first_group
 
     groups: dict[str, int] = {}
     wanted = _names(section["groups"]) if "groups" in section else list(manual_groups)
@@ -80,15 +86,22 @@ def parse_routines(cell: Mapping[str, Any]) -> RoutinesConfig:
             warnings.append(f"routines.groups[{i}]: {name!r} is not a motion group of the robot driver "
                             f"(manual.groups: {', '.join(manual_groups) or 'none'}); ignored")
     tools: dict[str, tuple[str, ...]] = {}
+    tool_groups: dict[str, str] = {}
     for i, name in enumerate(_names(section.get("tools"))):
-        if name in manual_tools:
-            tools[name] = manual_tools[name]
-        else:
+        if name not in manual_tools:
             warnings.append(f"routines.tools[{i}]: {name!r} is not a tool of the robot driver "
                             f"(manual.tools: {', '.join(manual_tools) or 'none'}); ignored")
+        elif manual_tool_groups[name] not in groups:
+            # A routine uses the tools of its own group: this one could never be recorded or run.
+            warnings.append(f"routines.tools[{i}]: tool {name!r} is on group {manual_tool_groups[name]!r} "
+                            f"(manual.tools), which routines.groups does not offer ({', '.join(groups) or 'none'}); "
+                            f"ignored")
+        else:
+            tools[name] = manual_tools[name]
+            tool_groups[name] = manual_tool_groups[name]
     directory = check_directory(section.get("directory", DEFAULT_DIRECTORY))
-    return RoutinesConfig(directory, groups, tools, _speed(section, "speed"), _speed(section, "acceleration"),
-                          tuple(warnings))
+    return RoutinesConfig(directory, groups, tools, tool_groups, _speed(section, "speed"),
+                          _speed(section, "acceleration"), tuple(warnings))
 
 
 def routines_dir(config: RoutinesConfig, data_dir: Optional[str] = None) -> str:

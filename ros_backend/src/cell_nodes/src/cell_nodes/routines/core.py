@@ -57,7 +57,9 @@ class Routines:
                 step = Step(POSE, tuple(float(v) for v in tcp), tuple(float(v) for v in joints))
                 text = f"Pose recorded: {format_pose(step.pose)}"
             elif kind == ACTION:
-                check_tool_action(self.config, tool, action)
+                if group:
+                    check_group(self.config, group)
+                check_tool_action(self.config, tool, action, group)
                 step = Step(ACTION, tool=tool, action=action)
                 text = f"{_title(tool)} {action} recorded"
             else:

@@ -100,14 +100,29 @@ def check_group(config: RoutinesConfig, group: str) -> None:
                            f"{config.group_names()})")
 
 
-def check_tool_action(config: RoutinesConfig, tool: str, action: str) -> None:
+def check_tool_action(config: RoutinesConfig, tool: str, action: str, group: str = "") -> None:
+    """The tool may be used (by a routine of `group`, when given: a tool of that group) and has the action."""
     if not tool:
-        raise RoutineError(f"a tool action needs a tool (routines.tools: {config.tool_names()})")
+        raise RoutineError(f"a tool action needs a tool (routines.tools: {config.tool_names(group)})")
     if tool not in config.tools:
         raise RoutineError(f"unknown tool {_shown(tool)} for routines (routines.tools: {config.tool_names()})")
+    own = config.tool_groups.get(tool)
+    if group and own and own != group:
+        raise RoutineError(f"tool {tool} is on group {own}, not {group} (a routine uses its group's tools: "
+                           f"{config.tool_names(group)})")
     actions = config.tools[tool]
     if action not in actions:
         raise RoutineError(f"unknown action {_shown(action)} for tool {tool} (it has: {', '.join(actions) or 'none'})")
+
+
+def check_tool(config: RoutinesConfig, tool: str, group: str) -> None:
+    """The routine's default tool: offered for routines and on the routine's group."""
+    if tool not in config.tools:
+        raise RoutineError(f"unknown tool {_shown(tool)} for routines (routines.tools: {config.tool_names()})")
+    own = config.tool_groups.get(tool)
+    if own and own != group:
+        raise RoutineError(f"tool {tool} is on group {own}, not {group} (a routine uses its group's tools: "
+                           f"{config.tool_names(group)})")
 
 
 def _step_shape(step: Step, group_joints: Optional[int]) -> Step:
@@ -133,8 +148,8 @@ def checked(config: RoutinesConfig, name: str, group: str, tool: str, steps: Seq
     """The routine as it is saved (action steps carry their tool), or RoutineError saying what is wrong."""
     check_name(name)
     check_group(config, group)
-    if tool and tool not in config.tools:
-        raise RoutineError(f"unknown tool {_shown(tool)} for routines (routines.tools: {config.tool_names()})")
+    if tool:
+        check_tool(config, tool, group)
     if not steps:
         raise RoutineError("a routine needs at least one step")
     if len(steps) > MAX_STEPS:
@@ -145,7 +160,7 @@ def checked(config: RoutinesConfig, name: str, group: str, tool: str, steps: Seq
             s = _step_shape(step, config.groups[group])
             if s.kind == ACTION:
                 s = Step(ACTION, tool=s.tool or tool, action=s.action)
-                check_tool_action(config, s.tool, s.action)
+                check_tool_action(config, s.tool, s.action, group)
         except RoutineError as e:
             raise RoutineError(f"step {i}: {e}") from None
         out.append(s)

@@ -1,0 +1,39 @@
+// Manual-motion steps shared by the demo cell's Manual specs (manual.spec.js, manual-lease.spec.js).
+import fs from 'node:fs';
+import path from 'node:path';
+import yaml from 'js-yaml';
+import { expect } from '@playwright/test';
+import { loginAs } from './app.js';
+import { REPO_ROOT } from './stack.js';
+
+export const cell = /** @type {any} */ (yaml.load(fs.readFileSync(path.join(REPO_ROOT, 'config/demo-cell.yaml'), 'utf8')));
+export const arm = cell.manual.groups[0];
+// A jog stopped: 50 consecutive /joint_states (0.4 s at 125 Hz) without joint motion.
+export const STILL = { messages: 50, rad: 1e-4 };
+
+export const jogMsg = { group: arm.name, mode: 'joint', axis: 0, direction: 1, speed: 0.5, frame: 'base' };
+
+/** @param {import('@playwright/test').Page} page @param {string} [who] */
+export async function openManual(page, who = 'admin') {
+  await loginAs(page, who);
+  await page.goto('/manual');
+  await expect(page.getByTestId('page-title')).toHaveText(cell.pages.find((/** @type {any} */ p) => p.id === 'manual').title);
+}
+
+/** Wait for the arm to stand still, then check it stays still. @param {import('./robot.js').RobotWatch} robot */
+export async function expectStandstill(robot, timeout = 3_000) {
+  await expect.poll(() => robot.speed(), { timeout, intervals: [20] }).toBeLessThan(1e-3);
+  const after = await robot.observe(STILL.messages);
+  expect(after.travel).toBeLessThan(STILL.rad);
+}
+
+/**
+ * Hold a jog button down (mouse: the pointer events a thumb would send) until the arm moves.
+ * @param {import('@playwright/test').Page} page @param {import('./robot.js').RobotWatch} robot @param {string} name
+ */
+export async function holdJog(page, robot, name) {
+  const before = robot.joints();
+  await page.getByRole('button', { name, exact: true }).hover();
+  await page.mouse.down();
+  await expect.poll(() => Math.max(...robot.joints().map((q, i) => Math.abs(q - before[i]))), { timeout: 5_000 }).toBeGreaterThan(0.01);
+}

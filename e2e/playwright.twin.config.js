@@ -1,0 +1,15 @@
+// The second cell (config/twin-arm-cell.yaml: two UR arms, a third role) through the same code: its own stack on
+// its own ports and controller addresses, the phone profile. `npm test -w e2e` runs the demo cell's config, then this.
+import { defineConfig } from '@playwright/test';
+import base from './playwright.config.js';
+
+process.env.E2E_CELL_CONFIG ||= 'config/twin-arm-cell.yaml';
+process.env.E2E_PORT ||= '18180';
+process.env.E2E_UR_HOSTS ||= 'left=127.0.4.1,right=127.0.4.2';
+
+export default defineConfig({
+  ...base,
+  testDir: './twin',
+  use: { ...base.use, baseURL: `http://localhost:${process.env.E2E_PORT}` },
+  projects: base.projects?.filter((p) => p.name === 'phone').map((p) => ({ ...p, testIgnore: undefined })),
+});

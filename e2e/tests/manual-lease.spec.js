@@ -1,0 +1,45 @@
+// The control lease on the Manual page: one session holds control, another one's jog is refused, an admin's
+// take-over stops the holder's jog. Two sessions in one browser: on the phone profile only (playwright.config.js).
+import { test, expect } from '@playwright/test';
+import { sessionCookie, rosSocket } from '../lib/app.js';
+import { watchRobot } from '../lib/robot.js';
+import { jogMsg, openManual, expectStandstill, holdJog } from '../lib/manual.js';
+
+/** @type {import('../lib/robot.js').RobotWatch} */
+let robot;
+test.beforeAll(async () => { robot = await watchRobot(); });
+test.afterAll(() => robot?.close());
+
+test('one session holds control: another one\'s jog is refused; an admin take-over stops the holder\'s jog', async ({ page, browser, baseURL }) => {
+  await openManual(page);
+  await page.getByRole('button', { name: 'Take control' }).click();
+  await expect(page.getByTestId('lease-holder')).toContainText('You have control');
+
+  const other = await browser.newContext({ ...test.info().project.use, baseURL });
+  const second = await other.newPage();
+  try {
+    await openManual(second);
+    await expect(second.getByTestId('lease-holder')).toContainText('has control');
+    await expect(second.getByRole('button', { name: 'Jog joint 1 +', exact: true })).toBeDisabled();
+    const ros = await rosSocket(baseURL, await sessionCookie(other));
+    ros.send({ op: 'publish', id: 'j2', topic: '/cell/manual/jog', msg: jogMsg });
+    const refused = await ros.waitFor((m) => m.op === 'status' && m.id === 'j2');
+    expect(refused.level).toBe('error');
+    expect(refused.msg).toMatch(/control/i);
+    ros.ws.close();
+
+    // The holder jogs and keeps the button held; the second admin takes control over: the arm stops.
+    // (Two sessions in one browser: the holder's tab comes to the front, as on its own device.)
+    await page.bringToFront();
+    await expect(page.getByTestId('lease-holder')).toContainText('You have control');
+    await holdJog(page, robot, 'Jog joint 1 -');
+    await second.getByRole('button', { name: 'Take over control' }).click();
+    await expect(second.getByTestId('lease-holder')).toContainText('You have control');
+    await expectStandstill(robot);
+    await expect(page.getByTestId('lease-lost')).toBeVisible();
+    await page.mouse.up();
+    await second.getByRole('button', { name: 'Release control' }).click();
+  } finally {
+    await other.close();
+  }
+});

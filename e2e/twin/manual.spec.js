@@ -1,0 +1,51 @@
+// The twin-arm cell's Manual page on a phone: the motion group is chosen first, and each arm jogs (hold-to-run)
+// and stops on release while the other one stays still. The arms are watched from outside the app, on the
+// stack's rosbridge (/joint_states carries each arm's joints under the cell file's names).
+import fs from 'node:fs';
+import yaml from 'js-yaml';
+import { test, expect } from '@playwright/test';
+import { loginAs } from '../lib/app.js';
+import { watchRobot } from '../lib/robot.js';
+
+const cell = /** @type {any} */ (yaml.load(fs.readFileSync(String(process.env.E2E_CELL_CONFIG), 'utf8')));
+const groups = cell.manual.groups.map((/** @type {any} */ g) => g.name);
+
+/** @type {Record<string, import('../lib/robot.js').RobotWatch>} */
+const arms = {};
+test.beforeAll(async () => {
+  for (const g of groups) arms[g] = await watchRobot(g);
+});
+test.afterAll(() => Object.values(arms).forEach((a) => a.close()));
+
+/** Largest joint change since `before` (rad). @param {number[]} before @param {number[]} now */
+const moved = (before, now) => Math.max(...now.map((q, i) => Math.abs(q - before[i])));
+
+test('each arm is chosen first, jogs while held and stops on release; the other arm does not move', async ({ page }) => {
+  expect(groups.length).toBeGreaterThan(1);
+  await loginAs(page, 'admin');
+  await page.goto('/manual');
+  const chooser = page.getByRole('radiogroup', { name: 'Motion group' });
+  await expect(chooser).toBeVisible();
+  await page.getByRole('button', { name: 'Take control' }).click();
+  await expect(page.getByTestId('lease-holder')).toContainText('You have control');
+
+  for (const [i, group] of groups.entries()) {
+    const other = groups[(i + 1) % groups.length];
+    await chooser.getByRole('radio', { name: group }).check();
+    await expect(chooser.getByRole('radio', { name: group })).toBeChecked();
+    await expect(page.getByTestId('manual-status-group')).toContainText(group);
+    const jog = page.getByRole('button', { name: 'Jog joint 1 +', exact: true });
+    await expect(jog).toBeEnabled();
+    const before = arms[group].joints();
+    const otherBefore = arms[other].joints();
+    await jog.hover();
+    await page.mouse.down();
+    await expect.poll(() => moved(before, arms[group].joints()), { timeout: 5_000 }).toBeGreaterThan(0.01);
+    await page.mouse.up();
+    // Released: this arm stands still within a moment and stays still; the other one never moved.
+    await expect.poll(() => arms[group].speed(), { timeout: 3_000, intervals: [20] }).toBeLessThan(1e-3);
+    expect((await arms[group].observe(50)).travel).toBeLessThan(1e-4);
+    expect(moved(otherBefore, arms[other].joints())).toBeLessThan(1e-3);
+  }
+  await page.getByRole('button', { name: 'Release control' }).click();
+});

@@ -1,0 +1,62 @@
+// The twin-arm cell's process on a phone: one cycle hands a cube over from the left arm (gripper) to the right arm
+// (vacuum tool) through the stand, through the real page, BFF, process nodes, both robot drivers (ur_rtde) and the
+// simulated cell. Where the cube ends up is read from outside the app: the sim's ground truth (/sim/objects).
+import fs from 'node:fs';
+import yaml from 'js-yaml';
+import { WebSocket } from 'ws';
+import { test, expect } from '@playwright/test';
+import { loginAs } from '../lib/app.js';
+
+const cell = /** @type {any} */ (yaml.load(fs.readFileSync(String(process.env.E2E_CELL_CONFIG), 'utf8')));
+const stations = cell.simulation.stations;
+const pocket = stations.find((/** @type {any} */ s) => s.kind === 'fixture').pockets[0];
+const stand = stations.find((/** @type {any} */ s) => s.kind === 'stand');
+
+/** The parts' world positions from the sim (/sim/objects, 5 Hz), on the stack's own rosbridge. */
+async function watchParts() {
+  const ws = new WebSocket(String(process.env.E2E_ROSBRIDGE_URL));
+  /** @type {{x: number, y: number, z: number}[]} */
+  let parts = [];
+  ws.on('message', (d) => {
+    const m = JSON.parse(d.toString());
+    if (m.op === 'publish' && m.topic === '/sim/objects') parts = m.msg.poses.map((/** @type {any} */ p) => p.position);
+  });
+  await new Promise((resolve, reject) => { ws.once('open', resolve); ws.once('error', reject); });
+  ws.send(JSON.stringify({ op: 'subscribe', id: 'parts', topic: '/sim/objects', type: 'geometry_msgs/PoseArray' }));
+  await expect.poll(() => parts.length, { timeout: 20_000 }).toBeGreaterThan(0);
+  return { parts: () => parts, close: () => ws.close() };
+}
+
+test('one cycle hands the first cube over from the left arm to the right arm and into its pocket', async ({ page }) => {
+  test.setTimeout(240_000);
+  const sim = await watchParts();
+  try {
+    const near = (/** @type {number[]} */ [x, y], tol = 0.01) => {
+      const p = sim.parts()[0];
+      return Math.hypot(p.x - x, p.y - y) < tol;
+    };
+    expect(near(pocket, 0.05), 'the first cube starts away from the pocket').toBe(false);
+    await loginAs(page, 'operator');
+    await page.goto('/process');
+    const state = page.getByTestId('process-state');
+    await expect(state).toHaveText('Idle', { timeout: 30_000 });
+    await page.getByRole('button', { name: 'Take control' }).click();
+    await expect(page.getByTestId('lease-holder')).toContainText('You have control');
+    await page.getByRole('textbox', { name: 'Cycles' }).fill('1');
+    await page.getByRole('button', { name: 'Start', exact: true }).click();
+    const dialog = page.getByRole('dialog', { name: 'Start away from the start position?' });
+    await expect(dialog.or(state.filter({ hasText: 'Running' }))).toBeVisible({ timeout: 15_000 });
+    if (await dialog.isVisible()) await dialog.getByRole('button', { name: 'Start anyway' }).click();
+    await expect(state).toHaveText('Running');
+    // The cube passes the stand (the left arm put it there), then ends in the right arm's first pocket.
+    await expect.poll(() => near(stand.position, 0.02), { timeout: 120_000, intervals: [200] }).toBe(true);
+    await expect(page.getByTestId('process-operation')).toContainText(/stand|fixture|home/, { timeout: 60_000 });
+    await expect(state).toHaveText('Idle', { timeout: 150_000 });
+    await expect(page.getByTestId('process-cycles-done')).toHaveText('1');
+    await expect.poll(() => near(pocket, 0.005), { timeout: 5_000 }).toBe(true);
+    expect(sim.parts()[0].z).toBeLessThan(0.04);
+    await page.getByRole('button', { name: 'Release control' }).click();
+  } finally {
+    sim.close();
+  }
+});
