@@ -21,16 +21,22 @@ export default defineConfig({
   // The tests share one stack whose ROS state (mode, rosbridge process) they change: one at a time.
   workers: 1,
   fullyParallel: false,
-  retries: 0,
+  // One retry: a test that fails once and passes on its retry is reported as flaky (by name, with its first error
+  // and page snapshot) without failing the run; one that fails twice fails it. The stack is real processes on
+  // 2 busy cores in CI, and a rare stall there must not cost a 25-minute run, nor go unreported.
+  retries: 1,
   timeout: 60_000,
   expect: { timeout: 15_000 },
-  reporter: process.env.CI ? [['list']] : [['list']],
+  reporter: [['list'], ['./lib/failure-context-reporter.js']],
   globalSetup: './lib/global-setup.js',
   globalTeardown: './lib/global-teardown.js',
   use: {
     baseURL: `http://localhost:${process.env.E2E_PORT || 18080}`,
     serviceWorkers: 'allow',
     trace: 'off',
+    // A hung action or navigation fails with its own call log well before the test's timeout.
+    actionTimeout: 15_000,
+    navigationTimeout: 30_000,
     screenshot: 'only-on-failure',
   },
   projects: [

@@ -12,6 +12,8 @@
 // re-register with a new master). An external master (one we did not start) is never restarted. A crash
 // loop (5 crashes of one child within 60 s) ends the stack with exit code 1, a configuration error (a child
 // exits with 2) at once with exit code 2: whatever runs the stack (systemd) decides what comes next.
+// A BFF that runs but no longer answers /api/health (a blocked event loop) for LIVENESS_TIMEOUT_S (30 s; 0: off)
+// after it first answered is killed, and so restarted like one that died (scripts/supervise/liveness.js).
 import { spawn } from 'node:child_process';
 import crypto from 'node:crypto';
 import fs from 'node:fs';
@@ -25,6 +27,7 @@ import { launchFiles } from './feature-launch.js';
 import { masterOnline } from '../bff/src/core/ros/health.js';
 import { resolveHosts, armsOf } from '../bff/src/core/config/hosts.js';
 import { RestartPolicy, seconds } from './supervise/restart-policy.js';
+import { Liveness, graceFromEnv } from './supervise/liveness.js';
 
 const env = readEnv();
 const urHost = process.env.UR_HOST || '127.0.0.1'; // the UR controller, or where the simulated one listens
@@ -356,6 +359,11 @@ async function main() {
   let cell;
   /** @type {{host: string, groups: string[]}[]} */
   let arms;
+  /** @type {number | null} */
+  let livenessGraceMs;
+  try {
+    livenessGraceMs = graceFromEnv(process.env);
+  } catch (e) { console.error(/** @type {Error} */ (e).message); process.exit(2); }
   try {
     cell = loadCell(env.cellConfig, FEATURES);
     arms = armsOf(resolveHosts(cell.manual, process.env));
@@ -390,18 +398,12 @@ async function main() {
   }
   const launches = launchFiles(cell, path.join(REPO_ROOT, 'ros_backend/src/cell_bringup')).map(shellQuote).join(' ');
   startRos('ros', `roslaunch --wait ${launches} cell_config:=${shellQuote(env.cellConfig)} rosbridge_port:=${env.rosbridgePort}`);
-  start('bff', process.execPath, [path.join(REPO_ROOT, 'bff/src/server.js')]);
-  /** @returns {Promise<any>} */
-  const health = async () => {
-    try {
-      const r = await fetch(`http://127.0.0.1:${env.port}/api/health`, { signal: AbortSignal.timeout(2000) });
-      return r.ok ? await r.json() : null;
-    } catch { return null; }
-  };
+  const bff = start('bff', process.execPath, [path.join(REPO_ROOT, 'bff/src/server.js')]);
+  if (livenessGraceMs) watchLiveness(bff, async (ms) => !!(await bffHealth(ms)), livenessGraceMs);
   // Long enough for a few restarts of a child that dies while starting (a crash loop ends the stack first).
-  await waitFor(async () => !!(await health()), 60_000, 'the BFF');
+  await waitFor(async () => !!(await bffHealth()), 60_000, 'the BFF');
   try {
-    await waitFor(async () => (await health())?.ros?.rosbridge === true, 30000, 'rosbridge');
+    await waitFor(async () => (await bffHealth())?.ros?.rosbridge === true, 30000, 'rosbridge');
   } catch (e) {
     if (stopping) throw e;
     log('warning: rosbridge does not answer yet; the app will connect when it does');
@@ -409,6 +411,42 @@ async function main() {
   const lan = Object.values(os.networkInterfaces()).flat().find((i) => i && i.family === 'IPv4' && !i.internal);
   log(`ready: http://localhost:${env.port}/`);
   if (lan) log(`phones and tablets: https://${lan.address}:${env.tlsPort}/ (trust the cell's certificate first: http://${lan.address}:${env.port}/trust)`);
+}
+
+/** The BFF's health answer, or null when it does not answer within `timeoutMs`. @returns {Promise<any>} */
+async function bffHealth(timeoutMs = 2000) {
+  try {
+    const r = await fetch(`http://127.0.0.1:${env.port}/api/health`, { signal: AbortSignal.timeout(timeoutMs) });
+    return r.ok ? await r.json() : null;
+  } catch { return null; }
+}
+
+/**
+ * Probe a running child; kill it when it has answered since it started and then not for `graceMs`: its exit
+ * handler restarts it (and counts the crash).
+ * @param {Child} c @param {(timeoutMs: number) => Promise<boolean>} probe @param {number} graceMs
+ */
+function watchLiveness(c, probe, graceMs) {
+  const liveness = new Liveness({ graceMs });
+  /** @type {import('node:child_process').ChildProcess | null} */
+  let judged = null;
+  let probing = false;
+  const timer = setInterval(async () => {
+    const p = c.proc;
+    if (stopping || probing || !p || exited(p)) return;
+    if (p !== judged) { judged = p; liveness.started(); }
+    probing = true;
+    try {
+      const ok = await probe(Math.min(5000, graceMs));
+      if (p !== c.proc || stopping) return;
+      if (ok) liveness.answered();
+      else if (liveness.hung()) {
+        log(`${c.name} has not answered its health check for ${seconds(liveness.silentMs())}; killing it to restart it`);
+        signalGroup(p.pid, 'SIGKILL');
+      }
+    } finally { probing = false; }
+  }, Math.max(250, Math.min(5000, graceMs / 4)));
+  timer.unref();
 }
 
 /** @param {string} s */

@@ -25,12 +25,14 @@ export const ENV_VARS = [
   { name: 'DATA_DIR', meaning: 'runtime state: users, session key, audit log, CSV, routines, backups, ROS logs; the service user must own it', dflt: '', note: '<repo>/.data', core: true },
   { name: 'USERS_FILE', meaning: 'the users file, scrypt hashes only', dflt: '', note: '$DATA_DIR/users.json', core: true },
   { name: 'UR_HOST', meaning: 'the UR controller, or the address the simulated controller listens on', dflt: '127.0.0.1', core: true },
+  { name: 'UR_HOSTS', meaning: 'per motion group, e.g. "left=10.0.0.2,right=10.0.0.3": overrides the hosts of the cell file', dflt: '', note: 'manual.groups[].host of the cell file', core: false },
   { name: 'UR_SIM', meaning: '0: do not start the simulated cell (a real UR at UR_HOST)', dflt: '1', core: false },
   { name: 'SIM_ARGS', meaning: 'extra options for the simulated cell, e.g. "--no-cameras"', dflt: '', note: 'none', core: false },
   { name: 'TLS_CERT', meaning: 'your own certificate (PEM file) for the HTTPS port', dflt: '', note: 'a local CA in $DATA_DIR/tls', core: false },
   { name: 'TLS_KEY', meaning: 'the key of TLS_CERT (PEM file)', dflt: '', note: 'a local CA in $DATA_DIR/tls', core: false },
   { name: 'USB_ROOTS', meaning: 'colon-separated mount roots where USB drives appear', dflt: '', note: 'database.usb_roots of the cell file', core: false },
   { name: 'SESSION_TTL_S', meaning: 'session token lifetime in seconds', dflt: '1800', core: false },
+  { name: 'LIVENESS_TIMEOUT_S', meaning: 'a BFF that does not answer /api/health this long is killed and restarted; 0: off', dflt: '30', core: false },
   { name: 'BFF_HOST', meaning: 'address the BFF listens on', dflt: '0.0.0.0', core: false },
 ];
 

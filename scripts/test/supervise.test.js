@@ -12,6 +12,7 @@ import { stackEnv, addUser, startStack, stopStack, pidsOfStack } from '../../e2e
 const BASE = 28780;
 const LOOP_BASE = 28880;
 const UR_HOST = '127.0.0.31';
+const HANG_S = 6;
 
 /** Poll `pred` every 50 ms until it holds or `ms` have passed; true if it held. */
 async function until(pred, ms) {
@@ -112,7 +113,9 @@ function killLeftovers(env, marker) {
 
 describe('a running stack restarts what dies', { timeout: 300_000 }, () => {
   // The simulated cell runs here (no cameras, to spare the CPU) so roscore's case restarts it too.
-  const env = stackEnv({ port: BASE, masterPort: BASE + 1, rosbridgePort: BASE + 2, urHost: UR_HOST, extraEnv: { SIM_ARGS: '--no-cameras' } });
+  // A BFF that does not answer its health check for 6 s after it first answered is hung (30 s by default).
+  const env = stackEnv({ port: BASE, masterPort: BASE + 1, rosbridgePort: BASE + 2, urHost: UR_HOST,
+    extraEnv: { SIM_ARGS: '--no-cameras', LIVENESS_TIMEOUT_S: String(HANG_S) } });
   delete env.UR_SIM;
   const bff = `http://127.0.0.1:${BASE}`;
   const rosbridge = `ws://127.0.0.1:${BASE + 2}`;
@@ -248,6 +251,27 @@ describe('a running stack restarts what dies', { timeout: 300_000 }, () => {
     took.simDriver = (Date.now() - t0) / 1000;
     t.diagnostic(`sim: the robot driver is connected to the new sim ${took.simDriver} s after the SIGKILL`);
     assert.match(logSince(stack, from), /\[stack\] sim exited \(SIGKILL\); restarting in 0\.5 s \(crash 1 of 5 in 60 s\)/);
+  });
+
+  test('a BFF that runs but no longer answers (SIGSTOP) is killed after LIVENESS_TIMEOUT_S and restarted', async (t) => {
+    const old = childPid(env, stack.proc.pid, /bff\/src\/server\.js/);
+    assert.ok(old && (await health(BASE)), 'the BFF runs and answers');
+    const from = stack.output().length;
+    const t0 = Date.now();
+    process.kill(old, 'SIGSTOP'); // alive, its port open, its event loop answering nothing: a hang
+    t.after(() => { try { process.kill(old, 'SIGKILL'); } catch { /* gone, as it should be */ } });
+    assert.ok(await until(async () => (await health(BASE)) === null, 5000), 'the stopped BFF does not answer');
+    assert.ok(await until(async () => !!(await health(BASE)), 60_000), `the BFF is back:\n${logSince(stack, from)}`);
+    took.bffHung = (Date.now() - t0) / 1000;
+    t.diagnostic(`hung BFF: /api/health answers again ${took.bffHung} s after its SIGSTOP (grace ${HANG_S} s)`);
+    assert.ok(took.bffHung >= HANG_S, 'not killed before the grace period');
+    const log = logSince(stack, from);
+    assert.match(log, /\[stack\] bff has not answered its health check for [\d.]+ s; killing it to restart it/);
+    assert.match(log, /\[stack\] bff exited \(SIGKILL\); restarting in [\d.]+ s \(crash \d of 5 in 60 s\)/);
+    assert.ok(!fs.existsSync(`/proc/${old}`) || /\) Z /.test(read(old, 'stat')), 'the hung process is gone');
+    const fresh = childPid(env, stack.proc.pid, /bff\/src\/server\.js/);
+    assert.ok(fresh && fresh !== old);
+    assert.equal((await fetch(`${bff}/api/auth/me`, { headers: { cookie } })).status, 200, 'still signed in');
   });
 
   test('Ctrl-C while a restart waits out its back-off: no restart, everything gone within 5 s', async (t) => {
