@@ -21,9 +21,9 @@ const STATE = { connected: true, tcp_pose: [0.4, -0.1, 0.3, 0, 3.1416, 0] };
 /** @type {ReturnType<typeof makeFakeFactory>} */
 let f;
 
-/** @param {any} section */
-async function open(section) {
-  session.user = { username: 'admin', role: 'admin' };
+/** @param {any} section @param {string} [username] */
+async function open(section, username = 'admin') {
+  session.user = { username, role: 'admin' };
   session.config = /** @type {any} */ ({
     cell: { id: 'c', name: 'Twin' }, role: 'admin', pages: [{ id: 'routines', title: 'Routines' }],
     operation_mode: { topic: '/cell/mode', type: 't', modes: [] }, commands: ['routines'], features: { routines: section },
@@ -50,7 +50,7 @@ beforeEach(() => {
   ros.url = () => 'ws://test/ros';
   session.offline = false;
   vi.stubGlobal('fetch', vi.fn(async () => new Response(JSON.stringify({ holder: null, you: false }), { status: 200 })));
-  Object.assign(draft, { steps: [], group: '', tool: '', action: '', name: '' });
+  Object.assign(draft, { steps: [], group: '', tool: '', action: '', name: '', owner: '' });
 });
 
 afterEach(() => {
@@ -94,5 +94,36 @@ describe('Routines page with two motion groups', () => {
     expect(options('Motion group')).toEqual(['arm']);
     expect(live('/cell/manual/arm/state').length).toBe(1);
     expect(options('Tool')).toEqual(['gripper']);
+  });
+});
+
+describe('the draft belongs to the user who recorded it', () => {
+  /** Record one pose for `right` and name the draft. */
+  async function recordOne() {
+    await fireEvent.change(screen.getByRole('combobox', { name: 'Motion group' }), { target: { value: 'right' } });
+    flushSync();
+    await fireEvent.click(screen.getByRole('button', { name: 'Add pose' }));
+    f.calls.find((c) => c.name === '/cell/routines/record')?.ok({ success: true, step: { kind: 'pose', pose: [0.1, 0.2, 0.3, 0, 0, 0], joints: [] } });
+    await vi.waitFor(() => expect(screen.getByTestId('routine-draft')).toBeTruthy());
+    await fireEvent.input(screen.getByRole('textbox', { name: 'Routine name' }), { target: { value: 'half done' } });
+  }
+
+  it('kept for the same user across page changes; empty for the next user who signs in on this phone', async () => {
+    await open(TWIN, 'anna');
+    await recordOne();
+    cleanup();
+    ros.stop();
+
+    await open(TWIN, 'anna');
+    expect(screen.getAllByRole('listitem').length).toBeGreaterThan(0);
+    expect(screen.getByTestId('routine-draft').textContent).toMatch(/Pose/);
+    expect(/** @type {HTMLInputElement} */ (screen.getByRole('textbox', { name: 'Routine name' })).value).toBe('half done');
+    cleanup();
+    ros.stop();
+
+    await open(TWIN, 'ben');
+    expect(screen.queryByTestId('routine-draft')).toBeNull();
+    expect(/** @type {HTMLInputElement} */ (screen.getByRole('textbox', { name: 'Routine name' })).value).toBe('');
+    expect(/** @type {HTMLSelectElement} */ (screen.getByRole('combobox', { name: 'Motion group' })).value).toBe('left');
   });
 });

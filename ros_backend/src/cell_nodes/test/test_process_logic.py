@@ -3,6 +3,7 @@ fake robot and a fake clock (sequencing, cycling, pause, resume, stop, single op
 topic, routines), the operation-mode rules and the client's state, refusals and cycle counter."""
 from __future__ import annotations
 
+import math
 import threading
 import time
 from pathlib import Path
@@ -807,6 +808,36 @@ def test_the_demo_cell_reads_its_approach_height_from_the_parameters_csv(tmp_pat
     assert approach.offset[2] == pytest.approx(0.08)
 
 
+
+def test_a_new_start_takes_the_parameters_as_saved_now_and_a_running_run_keeps_its_own(tmp_path, monkeypatch) -> None:
+    """What the process server does at each start: parse the cell's process again (the CSV as saved now) and hand it
+    to begin(), which adopts it only for a run it accepts."""
+    from pathlib import Path
+    from cell_nodes.cell_file import load_cell
+    from cell_nodes.process.config import parse_cell_process
+    monkeypatch.setenv("DATA_DIR", str(tmp_path))
+    csv = tmp_path / "parameters.csv"
+    cell = load_cell(str(Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"))
+    approach_z = lambda cfg: cfg.operations[0].steps[2].offset[2]   # noqa: E731 - pick part: the approach pose
+    csv.write_text("id,value\napproach_height,80\n")
+    h = Harness(parse_cell_process(cell), step_s=0.0)
+    gate = h.robot.gate("move_named")
+    csv.write_text("id,value\napproach_height,120\n")   # saved on the Parameters page before Start
+    assert h.ex.begin(RunRequest(0, 1), parse_cell_process(cell)) is None
+    assert approach_z(h.ex.config) == pytest.approx(0.12)
+    h.thread = threading.Thread(target=lambda: setattr(h, "result", h.ex.run(RunRequest(0, 1))), daemon=True)
+    h.thread.start()
+    wait_for(h.robot.blocked.is_set, 5, what="running")
+    # Saved while it runs: a start now is refused and the run goes on with the values it started with.
+    csv.write_text("id,value\napproach_height,30\n")
+    assert h.ex.begin(RunRequest(0, 1), parse_cell_process(cell)) == "the process is already running: stop it first"
+    gate.set()
+    assert h.join().success
+    part = cell["process"]["poses"]["part"][0]
+    approach = next(c[2] for c in h.robot.calls if c[0] == "move_pose")
+    assert math.dist(approach[:3], part[:3]) == pytest.approx(0.12, abs=1e-6)
+    assert h.ex.begin(RunRequest(0, 1), parse_cell_process(cell)) is None
+    assert approach_z(h.ex.config) == pytest.approx(0.03)
 
 # ================================================================================================ two arms
 TWIN_MANUAL = {

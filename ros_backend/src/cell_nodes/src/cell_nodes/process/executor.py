@@ -182,11 +182,15 @@ class Executor:
             self.on_log(level, text)
 
     # ------------------------------------------------------------------------------------------- commands
-    def begin(self, req: RunRequest) -> Optional[str]:
-        """Reserve the executor for `req` (then call run); returns why not, or None."""
+    def begin(self, req: RunRequest, config: Optional[ProcessConfig] = None) -> Optional[str]:
+        """Reserve the executor for `req` (then call run); returns why not, or None. `config`: the process as it is
+        now (the parameter values re-read at each start; the operations are the cell file's, so the same), adopted
+        only when the run is accepted: a running or paused run keeps the values it started with."""
         with self._lock:
             why = self.refusal(req)
             if why is None:
+                if config is not None:
+                    self.config = config
                 self._active, self._dry, self._pause, self._cancel = True, req.dry_run, False, None
                 self._routine_paused = False
         return why
