@@ -383,7 +383,13 @@ async function main() {
     await waitFor(async () => !coreDown && (await masterOnline(env.rosMasterUri)), 60_000, 'roscore');
   }
   const simulated = cell.robot?.simulated !== false && process.env.UR_SIM !== '0';
-  if (simulated && fs.existsSync(path.join(REPO_ROOT, 'sim/__main__.py'))) {
+  const rosControlSim = cell.simulation?.kind === 'ros_control';
+  if (simulated && rosControlSim) {
+    // The sim stands for the arm's own ROS driver (ros_control): it speaks ROS only, no controller address.
+    log('starting the simulated cell: the arm\'s ros_control driver');
+    const extra = (process.env.SIM_ARGS || '').split(/\s+/).filter(Boolean).map(shellQuote).join(' ');
+    startRos('sim', `python -m sim ${extra}`);
+  } else if (simulated && fs.existsSync(path.join(REPO_ROOT, 'sim/__main__.py'))) {
     log(`starting the simulated cell: ${arms.length > 1 ? 'UR controllers' : 'the UR controller'} at ${where}`);
     // SIM_ARGS: extra `python -m sim` options, e.g. "--no-cameras" or "--camera-size 320x240".
     const extra = (process.env.SIM_ARGS || '').split(/\s+/).filter(Boolean).map(shellQuote).join(' ');

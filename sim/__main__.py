@@ -105,7 +105,24 @@ def parse_args(argv: Optional[list[str]] = None) -> CellOptions:
                        ros=not a.no_ros, powered=not a.power_off, devices=devices)
 
 
+def simulation_kind(argv: Optional[list[str]]) -> Optional[str]:
+    """The cell file's simulation.kind (None: the UR cell, or a file parse_args will report on)."""
+    ap = argparse.ArgumentParser(add_help=False)
+    ap.add_argument("--cell", default=None)
+    known, _ = ap.parse_known_args(argv)
+    try:
+        doc = read_cell_file(known.cell or default_cell_path())
+    except CellFileError:
+        return None
+    section = doc.get("simulation") if isinstance(doc, dict) else None
+    return section.get("kind") if isinstance(section, dict) else None
+
+
 def main(argv: Optional[list[str]] = None) -> int:
+    if simulation_kind(argv) == "ros_control":
+        # A ros_control robot driver's ROS interface (sim/ros_control), not a UR controller.
+        from .ros_control.main import main as ros_control_main
+        return ros_control_main(argv)
     opts = parse_args(argv)
     # Many small periodic threads (500 Hz control loop, RTDE streams): hand the GIL over sooner than 5 ms.
     sys.setswitchinterval(0.0005)

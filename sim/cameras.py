@@ -65,6 +65,8 @@ def _render_main(conn, seed: int, urdf_dir: str, size: tuple[int, int], world_sp
     from .scene import DEFAULT_WORLD
     from .world import World
 
+    if getattr(world_spec, "kind", None) == "ros_control":  # the ros_control cell's arm (sim/ros_control/world.py)
+        from .ros_control.world import IiwaWorld as World  # noqa: F811
     world = World(seed=seed, render_only=True, urdf_dir=urdf_dir, spec=world_spec or DEFAULT_WORLD)
     p = world.p
     renderer = pybullet.ER_BULLET_HARDWARE_OPENGL if world.egl else pybullet.ER_TINY_RENDERER

@@ -244,6 +244,14 @@ def parse_simulation(doc: dict, path: str = "<cell file>") -> WorldSpec:
             raise bad(where, f"expected an integer from {allowed.start} to {allowed.stop - 1}, got {value!r}")
         return value
 
+    if isinstance(section, dict) and "kind" in section:
+        # What the sim stands for: UR controllers (the default) or a ros_control robot driver (sim/ros_control).
+        if section["kind"] == "ros_control":
+            from .ros_control.spec import parse_ros_control
+            return parse_ros_control(doc, path)
+        if section["kind"] != "ur":
+            raise bad("simulation.kind", f"expected ur or ros_control, got {section['kind']!r}")
+        section = {k: v for k, v in section.items() if k != "kind"}
     mapping(section, "simulation", SIM_KEYS)
 
     # arms

@@ -51,6 +51,8 @@ class RosBridge:
         several = len(cell.controllers) > 1
         # Frames name the arm when there are several (each has its own sensor).
         self._frame = (lambda group, frame: f"{group}_{frame}") if several else (lambda group, frame: frame)
+        # A cell whose arm has its own F/T frame in its robot_description names it (sim/ros_control).
+        self._ft_frame = getattr(cell, "ft_frame", None) or (lambda group: self._frame(group, "ft_sensor"))
         self.period = 1.0 / sensor_rate
         # disable_signals: the CLI owns SIGINT/SIGTERM and shuts us down itself.
         root_handlers, root_level = list(logging.root.handlers), logging.root.level
@@ -118,7 +120,7 @@ class RosBridge:
             if group not in wrenches:
                 w = self._types["WrenchStamped"]()
                 w.header.stamp = stamp
-                w.header.frame_id = self._frame(group, "ft_sensor")
+                w.header.frame_id = self._ft_frame(group)
                 f = self.cell.controllers[group].snapshot.ft_raw
                 w.wrench.force.x, w.wrench.force.y, w.wrench.force.z = float(f[0]), float(f[1]), float(f[2])
                 w.wrench.torque.x, w.wrench.torque.y, w.wrench.torque.z = float(f[3]), float(f[4]), float(f[5])

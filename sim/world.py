@@ -310,7 +310,7 @@ class World:
         for sx in (-1, 1):  # table legs, visual context for the global camera
             for sy in (-1, 1):
                 self._box((sx * 0.62, sy * 0.52, -0.4), (0.03, 0.03, 0.36), (0.25, 0.25, 0.25, 1), mass=0)
-        self.arms = [RobotArm(self, a) for a in self.spec.arms]
+        self.arms = [self._make_arm(a) for a in self.spec.arms]
         self.stations: dict[str, int] = {}
         self.pockets: dict[str, list[tuple[float, float]]] = {}
         for st in self.spec.stations:
@@ -324,6 +324,10 @@ class World:
         self.cubes = self._build_parts(self.spec.parts)
         for arm in self.arms:
             arm.start()
+
+    def _make_arm(self, spec: ArmSpec) -> RobotArm:
+        """The arm on the table (a subclass builds another robot: sim/ros_control/world.py)."""
+        return RobotArm(self, spec)
 
     def _box(self, pos: Sequence[float], half: Sequence[float], rgba: Sequence[float], mass: float,
              orn: Sequence[float] = (0, 0, 0, 1)) -> int:

@@ -15,7 +15,7 @@ export function cellGroups() {
   return cell?.manual?.groups ?? [];
 }
 
-/** @param {string} [group] @returns {{ name: string, joints: string[] }} */
+/** @param {string} [group] @returns {{ name: string, joints: string[], ros_control?: { joint_states?: string } }} */
 function groupOf(group) {
   const groups = cellGroups();
   const g = group === undefined ? groups[0] : groups.find((x) => x.name === group);
@@ -38,7 +38,10 @@ function groupOf(group) {
  * @returns {Promise<RobotWatch>}
  */
 export async function watchRobot(group, url = process.env.E2E_ROSBRIDGE_URL || '') {
-  const { name: groupName, joints } = groupOf(group);
+  const g = groupOf(group);
+  const { name: groupName, joints } = g;
+  // A ros_control arm's own driver publishes its joint states (the cell file names the topic).
+  const topic = g.ros_control?.joint_states ?? '/joint_states';
   const ws = new WebSocket(url);
   /** @type {{position: number[], velocity: number[]} | null} */
   let last = null;
@@ -46,7 +49,7 @@ export async function watchRobot(group, url = process.env.E2E_ROSBRIDGE_URL || '
   let listeners = [];
   ws.on('message', (d) => {
     const m = JSON.parse(d.toString());
-    if (m.op !== 'publish' || m.topic !== '/joint_states') return;
+    if (m.op !== 'publish' || m.topic !== topic) return;
     // Several arms share the topic: keep this group's joints, in its order (skip another arm's message).
     const names = Array.isArray(m.msg?.name) ? m.msg.name : [];
     const idx = joints.map((j) => names.indexOf(j));
@@ -56,10 +59,10 @@ export async function watchRobot(group, url = process.env.E2E_ROSBRIDGE_URL || '
     for (const l of listeners) l(msg);
   });
   await new Promise((resolve, reject) => { ws.once('open', resolve); ws.once('error', reject); });
-  ws.send(JSON.stringify({ op: 'subscribe', id: 'e2e-joints', topic: '/joint_states', type: 'sensor_msgs/JointState' }));
+  ws.send(JSON.stringify({ op: 'subscribe', id: 'e2e-joints', topic, type: 'sensor_msgs/JointState' }));
   const first = Date.now();
   while (!last) {
-    if (Date.now() - first > 20_000) throw new Error(`no /joint_states of group ${groupName} (${joints.join(', ')}) from the robot driver within 20 s`);
+    if (Date.now() - first > 20_000) throw new Error(`no ${topic} of group ${groupName} (${joints.join(', ')}) from the robot driver within 20 s`);
     await new Promise((r) => setTimeout(r, 20));
   }
   const now = () => /** @type {{position: number[], velocity: number[]}} */ (last);

@@ -41,10 +41,11 @@ export function parseUrHosts(text) {
 }
 
 /**
- * The controller address of every motion group of the cell file's manual section, in the section's order.
+ * The controller address of every UR motion group (driver ur_rtde) of the cell file's manual section, in the
+ * section's order (a ros_control group has none: the arm's own ROS driver owns its controller).
  * Throws (naming the field) for a bad group host, a bad UR_HOST that a group uses, a malformed UR_HOSTS, one
  * naming a group the cell does not have, or a bad host in it.
- * @param {{ groups?: { name: string, host?: string }[] } | undefined | null} manualSection
+ * @param {{ groups?: { name: string, host?: string, driver?: string }[] } | undefined | null} manualSection
  * @param {Record<string, string | undefined>} [env] default process.env
  * @returns {Record<string, string>} group -> host
  */
@@ -54,6 +55,7 @@ export function resolveHosts(manualSection, env = process.env) {
   const hosts = {};
   (manualSection?.groups ?? []).forEach((g, i) => {
     if (!g || typeof g !== 'object' || typeof g.name !== 'string') return;
+    if (g.driver === 'ros_control') return; // its own ROS driver owns its controller: no UR host
     const host = g.host;
     if (host !== undefined && host !== null && !isHost(host)) {
       throw new Error(`manual.groups[${i}].host: expected a host name or an IPv4 address, got '${host}'`);

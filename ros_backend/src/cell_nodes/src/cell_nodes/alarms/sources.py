@@ -44,6 +44,8 @@ ROBOT_MODE_ALARMS: dict[str, tuple[str, int, str]] = {
     "POWER_OFF": ("power_off", INFO, "the robot arm is powered off"),
     "BACKDRIVE": ("backdrive", WARNING, "the robot arm is in backdrive mode (brakes released by hand)"),
     "UPDATING_FIRMWARE": ("updating_firmware", WARNING, "the robot arm is updating its firmware"),
+    # ros_control arms: the arm's own driver runs, but its trajectory controller does not answer.
+    "CONTROLLER_NOT_RUNNING": ("controller_not_running", ERROR, "the arm's trajectory controller is not running"),
 }
 # The kinds of robot alarm that name the overall status (docs: SafetyStatus.status), most urgent first.
 STOP_STATUS = {"emergency_stop": "emergency stop", "protective_stop": "protective stop",
@@ -92,6 +94,9 @@ def robot_conditions(group: str, state: Any) -> tuple[RobotInfo, list[Condition]
     if mode in ROBOT_MODE_ALARMS:
         kind, sev, text = ROBOT_MODE_ALARMS[mode]
         out.append(Condition(robot_alarm_id(group, kind), robot_text(group, text), sev, "robot"))
+    fault = str(field(state, "fault", "") or "")
+    if fault:  # the controller ended a move itself (an aborted trajectory): active until the next command
+        out.append(Condition(robot_alarm_id(group, "motion_fault"), robot_text(group, fault), ERROR, "robot"))
     return RobotInfo(True, safety, mode), out
 
 

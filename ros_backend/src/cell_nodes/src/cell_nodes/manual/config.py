@@ -12,6 +12,10 @@ from typing import Any, Mapping, Optional, Sequence, Union
 UR_JOINTS: tuple[str, ...] = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
                               "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
 DEFAULT_HOST = "127.0.0.1"
+UR_RTDE, ROS_CONTROL = "ur_rtde", "ros_control"
+DRIVERS = (UR_RTDE, ROS_CONTROL)
+ROS_NAME = re.compile(r"/?[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*")
+LINK_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 # A group name is part of its topics' names (/cell/manual/<group>/state): a ROS name segment.
 GROUP_NAME = re.compile(r"[a-z][a-z0-9_]*")
 # manual.groups[].host and UR_HOSTS: an IPv4 address or a host name (its last label not all digits); the same
@@ -32,6 +36,36 @@ class Group:
     indices: tuple[int, ...]                       # each joint's index in the robot's joint vector
     configurations: dict[str, tuple[float, ...]] = field(default_factory=dict)
     host: Optional[str] = None                     # manual.groups[].host; None: UR_HOST (see resolve_hosts)
+    driver: str = UR_RTDE                          # the motion backend: ur_rtde or ros_control
+    ros_control: Optional["RosControlSpec"] = None  # the arm's own driver's interfaces (driver ros_control)
+
+    @property
+    def arm_key(self) -> Optional[str]:
+        """What makes two groups one arm, for the backends that do not go by host (ros_control: the controller)."""
+        return f"ros_control:{self.ros_control.controller}" if self.ros_control is not None else None
+
+
+@dataclass(frozen=True)
+class RosControlSpec:
+    """manual.groups[].ros_control: the standard interfaces of an arm's own ROS driver (docs/ros-interfaces.md)."""
+    joint_states: str                              # sensor_msgs/JointState topic
+    controller: str                                # joint_trajectory_controller namespace
+    base_link: str
+    tip_link: str
+    robot_description: Optional[str] = None        # URDF parameter, or
+    urdf: Optional[str] = None                     # a URDF file
+    path_tolerance: float = 0.1                    # rad
+    goal_time_tolerance: float = 1.0               # s
+    outputs: dict[int, str] = field(default_factory=dict)   # digital output -> std_srvs/SetBool service
+    inputs: dict[int, str] = field(default_factory=dict)    # digital input -> std_msgs/Bool topic
+
+    @property
+    def action(self) -> str:
+        return f"{self.controller}/follow_joint_trajectory"
+
+    @property
+    def command(self) -> str:
+        return f"{self.controller}/command"
 
 
 @dataclass(frozen=True)
@@ -128,6 +162,46 @@ def is_host(value: Any) -> bool:
     return isinstance(value, str) and HOST.fullmatch(value) is not None
 
 
+def _ros_name(value: Any, where: str) -> str:
+    if not isinstance(value, str) or not ROS_NAME.fullmatch(value):
+        raise ConfigError(f"{where}: expected a ROS name like /joint_states, got {value!r}")
+    return value
+
+
+def _ros_control(raw: Any, where: str) -> RosControlSpec:
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{where}: expected a mapping {{joint_states, controller, robot_description or urdf, "
+                          f"base_link, tip_link}}")
+    for key in ("base_link", "tip_link"):
+        if not isinstance(raw.get(key), str) or not LINK_NAME.fullmatch(raw[key]):
+            raise ConfigError(f"{where}.{key}: expected a URDF link name, got {raw.get(key)!r}")
+    if (raw.get("robot_description") is None) == (raw.get("urdf") is None):
+        raise ConfigError(f"{where}: give robot_description (a parameter) or urdf (a file), one of them")
+    io = raw.get("io") or {}
+
+    def wiring(kind: str) -> dict[int, str]:
+        table = io.get(kind) or {}
+        if not isinstance(table, dict):
+            raise ConfigError(f"{where}.io.{kind}: expected a mapping of numbers 0..7 to ROS names")
+        out: dict[int, str] = {}
+        for k, v in table.items():
+            n = _index(int(k) if isinstance(k, str) and k.isdigit() else k, f"{where}.io.{kind}.{k}")
+            out[n] = _ros_name(v, f"{where}.io.{kind}.{k}")
+        return out
+
+    return RosControlSpec(
+        joint_states=_ros_name(raw.get("joint_states", "/joint_states"), f"{where}.joint_states"),
+        controller=_ros_name(raw.get("controller"), f"{where}.controller"),
+        base_link=raw["base_link"], tip_link=raw["tip_link"],
+        robot_description=None if raw.get("robot_description") is None
+        else _ros_name(raw["robot_description"], f"{where}.robot_description"),
+        urdf=None if raw.get("urdf") is None else str(raw["urdf"]),
+        path_tolerance=_number(raw.get("path_tolerance", 0.1), f"{where}.path_tolerance"),
+        goal_time_tolerance=_number(raw.get("goal_time_tolerance", 1.0), f"{where}.goal_time_tolerance",
+                                    positive=False),
+        outputs=wiring("outputs"), inputs=wiring("inputs"))
+
+
 def parse_manual(section: Optional[Mapping[str, Any]], robot_joints: Sequence[str] = UR_JOINTS) -> ManualConfig:
     """Read the manual section; each group joint must name a robot joint (by its ending), once per group, and
     configurations must fit their group; a tool's group must be a group."""
@@ -149,8 +223,24 @@ def parse_manual(section: Optional[Mapping[str, Any]], robot_joints: Sequence[st
         joints = tuple(g.get("joints") or ())
         if not joints:
             raise ConfigError(f"{where}.joints: expected at least one joint")
+        driver = g.get("driver", UR_RTDE)
+        if driver not in DRIVERS:
+            raise ConfigError(f"{where}.driver: expected one of {', '.join(DRIVERS)}, got {driver!r}")
+        spec: Optional[RosControlSpec] = None
         indices: list[int] = []
-        for k, j in enumerate(joints):
+        if driver == ROS_CONTROL:
+            spec = _ros_control(g.get("ros_control"), f"{where}.ros_control")
+            if host is not None:
+                raise ConfigError(f"{where}.host: a ros_control group has no controller host (its driver owns it)")
+            for k, j in enumerate(joints):
+                if not isinstance(j, str) or not LINK_NAME.fullmatch(j):
+                    raise ConfigError(f"{where}.joints[{k}]: expected a joint name, got {j!r}")
+                if j in joints[:k]:
+                    raise ConfigError(f"{where}.joints[{k}]: {j!r} is named twice")
+            indices = list(range(len(joints)))
+        elif g.get("ros_control") is not None:
+            raise ConfigError(f"{where}.ros_control: only for driver: ros_control")
+        for k, j in enumerate(joints if driver == UR_RTDE else ()):
             index = ur_joint_index(j, robot_joints)
             if index is None:
                 raise ConfigError(f"{where}.joints[{k}]: {j!r} is not a joint of the robot (a joint name ends with "
@@ -165,7 +255,7 @@ def parse_manual(section: Optional[Mapping[str, Any]], robot_joints: Sequence[st
                 count = len(values) if isinstance(values, (list, tuple)) else "no list of"
                 raise ConfigError(f"{where}.configurations.{cname}: {count} values for {len(joints)} joints")
             configs[cname] = tuple(_number(v, f"{where}.configurations.{cname}", positive=False) for v in values)
-        groups[name] = Group(name, joints, tuple(indices), configs, host)
+        groups[name] = Group(name, joints, tuple(indices), configs, host, driver, spec)
     tools: dict[str, Tool] = {}
     first_group = next(iter(groups), "")
     for i, t in enumerate(section.get("tools") or []):
@@ -203,7 +293,7 @@ def default_host(environ: Mapping[str, str]) -> str:
 
 
 def resolve_hosts(section: Optional[Mapping[str, Any]], environ: Mapping[str, str]) -> dict[str, str]:
-    """{group: the address of the UR controller that moves it}, in the cell file's group order.
+    """{group: the address of the UR controller that moves it}, in the cell file's group order (ur_rtde groups only).
 
     A group's `host`, else UR_HOST (else 127.0.0.1); UR_HOSTS (`<group>=<host>[,<group>=<host>...]`) overrides it
     per group, so several stacks of one cell run side by side. Groups with the same host belong to the same arm.
@@ -215,6 +305,8 @@ def resolve_hosts(section: Optional[Mapping[str, Any]], environ: Mapping[str, st
     for i, g in enumerate(section.get("groups") or []):
         if not isinstance(g, Mapping) or not isinstance(g.get("name"), str):
             continue
+        if g.get("driver") == ROS_CONTROL:
+            continue  # its own ROS driver owns its controller: no UR host
         host = g.get("host")
         if host is not None and not is_host(host):
             raise ConfigError(f"manual.groups[{i}].host: expected a host name or an IPv4 address, got {host!r}")
@@ -243,7 +335,9 @@ class Arm:
     host: str
     groups: tuple[str, ...]
     tools: tuple[str, ...]
-    joint_names: tuple[str, ...]    # /joint_states names, one per robot joint in UR order
+    joint_names: tuple[str, ...]    # /joint_states names, one per robot joint in UR order (ros_control: the group's)
+    driver: str = UR_RTDE
+    ros_control: Optional[RosControlSpec] = None
 
     def config(self, cell: ManualConfig) -> ManualConfig:
         """The part of the cell's manual section this arm's driver works with."""
@@ -259,11 +353,25 @@ def plan_arms(config: ManualConfig, hosts: Mapping[str, str],
     name one joint differently, when two arms would publish a joint under the same name, or when a tool's
     move_named step moves a group of another arm."""
     by_host: dict[str, list[str]] = {}
-    for name in config.groups:
-        by_host.setdefault(hosts.get(name) or DEFAULT_HOST, []).append(name)
     order = list(config.groups)
     arms: list[Arm] = []
     owner: dict[str, tuple[str, str]] = {}          # joint name -> (host, group), over every arm
+    for name, g in config.groups.items():
+        if g.ros_control is None:
+            by_host.setdefault(hosts.get(name) or DEFAULT_HOST, []).append(name)
+            continue
+        # A ros_control arm is its controller; its joints are the names its own driver publishes.
+        key = g.arm_key or ""
+        if any(a.host == key for a in arms):
+            raise ConfigError(f"manual.groups[{order.index(name)}].ros_control.controller: {g.ros_control.controller} "
+                              f"moves another group already (one motion group per trajectory controller)")
+        for k, joint in enumerate(g.joints):
+            if joint in owner:
+                raise ConfigError(f"manual.groups[{order.index(name)}].joints[{k}]: {joint!r} is also a joint of "
+                                  f"group {owner[joint][1]}")
+            owner[joint] = (key, name)
+        arms.append(Arm(key, (name,), tuple(t.name for t in config.tools.values() if t.group == name), g.joints,
+                        ROS_CONTROL, g.ros_control))
     for host, names in by_host.items():
         named: dict[int, tuple[str, str]] = {}     # robot joint index -> (name, group)
         for gname in names:

@@ -16,8 +16,11 @@ from typing import Any, Callable, Optional, Protocol, Sequence, TypeVar
 
 T = TypeVar("T")
 
+CONTROLLER_NOT_RUNNING = 100
 ROBOT_MODES = {-1: "NO_CONTROLLER", 0: "DISCONNECTED", 1: "CONFIRM_SAFETY", 2: "BOOTING", 3: "POWER_OFF",
-               4: "POWER_ON", 5: "IDLE", 6: "BACKDRIVE", 7: "RUNNING", 8: "UPDATING_FIRMWARE"}
+               4: "POWER_ON", 5: "IDLE", 6: "BACKDRIVE", 7: "RUNNING", 8: "UPDATING_FIRMWARE",
+               # Not a UR mode: a ros_control arm whose trajectory controller does not answer (ros_control backend).
+               CONTROLLER_NOT_RUNNING: "CONTROLLER_NOT_RUNNING"}
 SAFETY_MODES = {1: "NORMAL", 2: "REDUCED", 3: "PROTECTIVE_STOP", 4: "RECOVERY", 5: "SAFEGUARD_STOP",
                 6: "SYSTEM_EMERGENCY_STOP", 7: "ROBOT_EMERGENCY_STOP", 8: "VIOLATION", 9: "FAULT",
                 10: "VALIDATE_JOINT_ID", 11: "UNDEFINED_SAFETY_MODE", 12: "AUTOMATIC_MODE_SAFEGUARD_STOP",
@@ -53,6 +56,9 @@ class ControlInterface(Protocol):
                                         max_orientation_error: float) -> bool: ...
     def getForwardKinematics(self, q: list[float], tcp_offset: list[float]) -> list[float]: ...
     def getTCPOffset(self) -> list[float]: ...
+    # Optional (the ros_control backend has it, ur_rtde does not): why the last move ended early, "" if it did not
+    # (an aborted or rejected trajectory goal, with the controller's error code and text).
+    # def getMoveError(self) -> str: ...
 
 
 class ReceiveInterface(Protocol):

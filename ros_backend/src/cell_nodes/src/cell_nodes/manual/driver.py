@@ -46,6 +46,11 @@ class Refused(Exception):
     """A command the driver does not carry out; the message says why (it goes back to the caller as is)."""
 
 
+class MotionFault(Refused):
+    """The controller ended a move itself (an aborted trajectory): reported as the arm's fault until the next
+    command, so the alarms feature raises it."""
+
+
 @dataclass(frozen=True)
 class Snapshot:
     """One reading of the robot over RTDE receive."""
@@ -83,6 +88,7 @@ class DriverState:
     joint_positions: list[float] = field(default_factory=list)
     tcp_pose: list[float] = field(default_factory=list)
     tcp_speed: list[float] = field(default_factory=list)
+    fault: str = ""                 # the controller ended the last move early (aborted trajectory); "" when none
 
 
 def read_snapshot(recv: ReceiveInterface) -> Snapshot:
@@ -135,6 +141,7 @@ class ManualDriver:
         self._end_reason = "stopped"
         self._sent: Optional[str] = None        # last motion command sent: "movej", "movel", "speedj", "speedl"
         self._message = ""
+        self._fault = ""
         self._threads: list[threading.Thread] = []
         self._stop_event = threading.Event()
         # The node sets these: on_change -> publish the state now; on_sample -> /joint_states after each poll.
@@ -183,7 +190,9 @@ class ManualDriver:
                 recv = run_with_timeout(lambda: self._connector.receive(self.host), 5.0, "ur-connect")
             except Exception as e:
                 log.debug("connect to %s failed: %s", self.host, e)
-                self._set_message(self._unreachable())
+                # A backend that knows why (ros_control: no joint states, a URDF that does not load) says so.
+                why = getattr(e, "reason", "")
+                self._set_message(f"{self._unreachable()}: {why}" if why else self._unreachable())
                 return False
             try:
                 io = run_with_timeout(lambda: self._connector.io(self.host), 5.0, "ur-connect")
@@ -374,7 +383,7 @@ class ManualDriver:
                            speed_scaling=s.speed_scaling, program_running=s.program_running and self._connected,
                            motion=self._motion, motion_group=self._group, motion_target=self._target,
                            progress=self._progress, message=self._message, joint_positions=list(s.q),
-                           tcp_pose=list(s.tcp_pose), tcp_speed=list(s.tcp_speed))
+                           tcp_pose=list(s.tcp_pose), tcp_speed=list(s.tcp_speed), fault=self._fault)
 
     def snapshot(self) -> Snapshot:
         return self._snap
@@ -408,6 +417,8 @@ class ManualDriver:
 
     @staticmethod
     def _not_movable_reason(s: Snapshot) -> str:
+        if s.robot_mode == "CONTROLLER_NOT_RUNNING":
+            return "the arm's trajectory controller is not running (its action server does not answer)"
         if s.robot_mode in ("POWER_ON", "IDLE"):
             return f"robot brakes are not released (mode {s.robot_mode})"
         if s.robot_mode != "RUNNING":
@@ -437,6 +448,7 @@ class ManualDriver:
                 self._check_robot()
                 if self._motion == IDLE:
                     self._token += 1
+                    self._fault = ""
                     self._motion, self._group, self._target, self._progress = motion, group, target, 0.0
                     self._sent = None
                     token = self._token
@@ -740,6 +752,12 @@ class ManualDriver:
             if not self._movable(s):
                 raise Refused(f"move aborted: {self._not_movable_reason(s)}")
             running = self._call(ctl.getAsyncOperationProgress) >= 0
+            error = self._call(ctl.getMoveError) if hasattr(ctl, "getMoveError") else ""
+            if error:
+                with self._cmd_lock:
+                    if self._token == token:
+                        self._fault = error
+                raise MotionFault(error)
             seen_running = seen_running or running
             p = min(max(progress(s), 0.0), 1.0)
             if abs(p - self._progress) >= 0.01:
@@ -815,7 +833,7 @@ class ManualDriver:
         s = self._snap
         if cmd.mode == JOINT:
             joint = g.indices[cmd.axis]
-            qd = [0.0] * 6
+            qd = [0.0] * len(s.q)
             qd[joint] = cmd.direction * self.limits.joint_jog_speed(cmd.speed, self._lever(ctl, s.q, joint))
             if self._sent == "speedl":  # switching speed modes: stop the other first (no blending of the two)
                 self._call(lambda: ctl.speedStop(STOP_DECEL_TCP))
@@ -832,6 +850,7 @@ class ManualDriver:
                 raise Refused("the controller refused the Cartesian jog")
             self._sent = "speedl"
         self._token += 1
+        self._fault = ""
         self._motion, self._group, self._target, self._progress = JOGGING, g.name, cmd.label(), 1.0
         self._message = f"jogging {cmd.label()}"
 

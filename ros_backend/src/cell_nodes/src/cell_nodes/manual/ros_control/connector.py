@@ -1,0 +1,49 @@
+"""The ros_control backend's Connector (controller.Connector): what driver.ManualDriver connects through. One
+transport for the arm's life (its subscriptions survive reconnects); each connect loads the URDF again and checks
+that the arm's driver publishes the group's joints, so a fixed URDF or a restarted driver is picked up by the
+driver's normal retry."""
+from __future__ import annotations
+
+import time
+from typing import Callable, Sequence
+
+from ..config import RosControlSpec
+from .arm import STATE_TIMEOUT, RosControlArm, Transport, Unreachable, load_kinematics
+
+
+class RosControlConnector:
+    def __init__(self, spec: RosControlSpec, joints: Sequence[str], transport: Transport, max_joint_speed: float,
+                 state_timeout: float = STATE_TIMEOUT, sleep: Callable[[float], None] = time.sleep) -> None:
+        self.spec = spec
+        self.joints = tuple(joints)
+        self.transport = transport
+        self.max_joint_speed = max_joint_speed
+        self.state_timeout = state_timeout
+        self.sleep = sleep
+        self._arm: RosControlArm | None = None
+
+    def receive(self, host: str) -> RosControlArm:
+        kin = load_kinematics(self.spec, self.joints, self.transport.robot_description())
+        arm = RosControlArm(self.spec, self.joints, self.transport, kin, self.max_joint_speed)
+        deadline = time.monotonic() + self.state_timeout
+        while not arm.isConnected():
+            if time.monotonic() > deadline:
+                raise Unreachable(f"no joint states on {self.spec.joint_states} (is the arm's driver running?)")
+            self.sleep(0.02)
+        arm.sample()  # raises when the group's joints are not all there
+        self._arm = arm
+        return arm
+
+    def _current(self) -> RosControlArm:
+        if self._arm is None:
+            raise Unreachable("not connected")
+        return self._arm
+
+    def io(self, host: str) -> RosControlArm:
+        return self._current()
+
+    def control(self, host: str) -> RosControlArm:
+        return self._current()
+
+    def dashboard(self, host: str) -> RosControlArm:
+        return self._current()
