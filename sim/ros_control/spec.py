@@ -145,9 +145,9 @@ def parse_ros_control(doc: dict, path: str = "<cell file>") -> RosControlWorld:
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
                 raise bad(f"{where}.tool.{k}", f"expected an IO number, got {v!r}")
             numbers[k] = v
-        rate = entry.get("rate_hz", 100)
-        if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not 1 <= rate <= 1000:
-            raise bad(f"{where}.rate_hz", f"expected a /joint_states rate from 1 to 1000 Hz, got {rate!r}")
+        rate = entry.get("rate_hz", 200)
+        if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not 10 <= rate <= 1000:
+            raise bad(f"{where}.rate_hz", f"expected a /joint_states rate from 10 to 1000 Hz, got {rate!r}")
         ros = _ros_names(groups.get(arm.group), arm.group, model, numbers, bad)
         robots.append(RosControlArm(group=arm.group, model_name=model_name, model=model,
                                     rename=tuple(rename.items()), base=arm.base, yaw=arm.yaw,
@@ -199,7 +199,9 @@ def _ros_names(group: Optional[dict], name: str, model: ArmModel, io_numbers: di
     if holding is None:
         raise bad(f"{where}.ros_control.io.inputs", f"no input {in_n} (part held, simulation tool.vacuum_input)")
     return RosNames(joint_states=topic("joint_states"), controller=topic("controller"),
-                    robot_description=topic("robot_description"), base_link=base_link, tip_link=tip,
+                    # A cell that reads its URDF from a file still gets the parameter a real driver sets.
+                    robot_description=topic("robot_description", rc.get("robot_description", "/robot_description")),
+                    base_link=base_link, tip_link=tip,
                     suction_service=topic(f"io.outputs.{out_n}", suction),
                     holding_topic=topic(f"io.inputs.{in_n}", holding))
 

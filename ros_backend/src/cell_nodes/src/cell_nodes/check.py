@@ -18,6 +18,9 @@ runs over the file, the same functions the nodes call in main():
 - modules_node: modules.config.parse_modules
 - routines_node: routines.config.parse_routines (its dropped groups and tools are warnings: the node runs on)
 - operation_mode_node: operation_mode.OperationMode
+- manual_node's ros_control backend: each ros_control group against the URDF its arm's driver offers, where it can
+  be known without ROS (a `urdf` file, or the simulated driver's): the chain's joints, the links, the configurations
+  within the joint limits (manual.ros_control.check)
 - the simulator (python -m sim): sim.cell_file.devices_from
 
 A feature's nodes start only when the cell file has its section (scripts/feature-launch.js), so only the sections
@@ -152,6 +155,15 @@ def check_operation_mode(cell: Mapping[str, Any], report: Report) -> None:
         report.problems.append(f"operation_mode: {e}")
 
 
+def check_arm_models(cell: Mapping[str, Any], report: Report, path: str) -> None:
+    """ros_control groups against their URDF (a file, or the simulated driver's): joints, links, limits."""
+    from cell_nodes.manual.ros_control.check import check_ros_control
+    try:
+        report.problems.extend(check_ros_control(cell, path))
+    except Exception as e:  # noqa: BLE001
+        report.problems.append(_crash("manual", "the ros_control backend", e))
+
+
 def check_sim(cell: Mapping[str, Any], report: Report, path: str = "<cell file>") -> None:
     from sim.cell_file import CellFileError, devices_from
     try:
@@ -182,6 +194,8 @@ def check_cell(cell: Mapping[str, Any], path: str = "<cell file>") -> Report:
     for section, check in SECTION_CHECKS:
         if section in cell:
             check(cell, report)
+    if "manual" in cell:
+        check_arm_models(cell, report, path)
     check_sim(cell, report, path)
     return report
 
