@@ -1,18 +1,26 @@
 #!/usr/bin/env node
 // Hold-to-run jogging, measured through the real page on a phone profile (Chromium), the BFF, rosbridge, the
-// driver (ur_rtde) and the simulated UR5; the arm's motion is the controller's own state read by ur_rtde receive
-// at 500 Hz (bench/rtde_probe.py). Starts its own stack on loopback ports, stops by itself.
+// driver and the simulated arm of a cell: BENCH_CELL (default config/demo-cell.yaml: ur_rtde and the simulated UR5,
+// the arm's motion read as the controller's own state by ur_rtde receive at 500 Hz, bench/rtde_probe.py;
+// config/iiwa-cell.yaml: the ros_control backend and the simulated iiwa driver, the motion read from that driver's
+// joint states at 200 Hz, bench/joint_states_probe.py). Starts its own stack on loopback ports, stops by itself.
 //   release -> decelerating (TCP speed below 95 % of the held speed), release -> standstill,
 //   browser frozen mid-jog (debugger pause: no heartbeats, socket open) -> standstill, peak TCP speed at full slider.
 import { spawn } from 'node:child_process';
+import fs from 'node:fs';
+import path from 'node:path';
+import yaml from 'js-yaml';
 import readline from 'node:readline';
 import { chromium, devices } from '@playwright/test';
 import { stackEnv, addUser, startStack, stopStack, REPO_ROOT } from '../e2e/lib/stack.js';
 
 const REPS = Number(process.env.BENCH_REPS || 5);
-const port = 38180;
+const cellFile = path.resolve(REPO_ROOT, process.env.BENCH_CELL || 'config/demo-cell.yaml');
+const cell = /** @type {any} */ (yaml.load(fs.readFileSync(cellFile, 'utf8')));
+const rosControl = cell.manual.groups[0].driver === 'ros_control';
+const port = rosControl ? 38280 : 38180;
 const urHost = '127.0.0.12';
-const env = stackEnv({ port, masterPort: port + 1, rosbridgePort: port + 2, urHost });
+const env = stackEnv({ port, masterPort: port + 1, rosbridgePort: port + 2, urHost, extraEnv: { CELL_CONFIG: cellFile } });
 addUser(env, 'bench', 'admin', 'bench-password');
 
 /** @type {Array<{t: number, lin: number, qd: number}>} wall time (ms), TCP speed (m/s), max joint speed (rad/s) */
@@ -34,7 +42,8 @@ async function firstSample(pred, from, timeoutMs = 3000) {
 }
 
 const stack = await startStack(env);
-const probe = spawn('bash', ['-c', `source scripts/ros-env.sh && exec python bench/rtde_probe.py ${urHost}`], { cwd: REPO_ROOT, env, stdio: ['ignore', 'pipe', 'inherit'] });
+const probeCmd = rosControl ? `python bench/joint_states_probe.py ${cellFile}` : `python bench/rtde_probe.py ${urHost}`;
+const probe = spawn('bash', ['-c', `source scripts/ros-env.sh && exec ${probeCmd}`], { cwd: REPO_ROOT, env, stdio: ['ignore', 'pipe', 'inherit'] });
 readline.createInterface({ input: probe.stdout }).on('line', (l) => {
   const [t, lin, qd] = l.split(' ').map(Number);
   samples.push({ t: t * 1000, lin, qd });
@@ -85,7 +94,10 @@ try {
     const speed = pct(held, 50);
     const tRelease = wallMs();
     await page.mouse.up();
-    peak = Math.max(peak, ...samples.filter((s) => s.t >= pressed && s.t <= tRelease).map((s) => s.lin));
+    const window = samples.filter((s) => s.t >= pressed && s.t <= tRelease);
+    const top = window.reduce((a, b) => (b.lin > a.lin ? b : a), window[0]);
+    if (process.env.BENCH_DEBUG) console.log(`  run ${i}: held ${(speed * 1000).toFixed(1)} mm/s, peak ${(top.lin * 1000).toFixed(1)} mm/s at ${(top.t - pressed).toFixed(0)} ms after the press`);
+    peak = Math.max(peak, top.lin);
     decel.push((await firstSample((s) => s.lin < 0.95 * speed, tRelease)).t - tRelease);
     still.push((await firstSample((s) => s.lin < STILL.lin && s.qd < STILL.qd, tRelease)).t - tRelease);
   }
@@ -107,7 +119,9 @@ try {
     await cdp.send('Debugger.resume');
     await page.mouse.up();
   }
-  console.log(`Hold-to-run jogging on the simulated UR5 (phone profile, ${REPS} runs each; controller state at 500 Hz)`);
+  console.log(rosControl
+    ? `Hold-to-run jogging on ${cell.cell.name}, ros_control backend (phone profile, ${REPS} runs each; the arm driver's joint states at 200 Hz)`
+    : `Hold-to-run jogging on the simulated UR5 (phone profile, ${REPS} runs each; controller state at 500 Hz)`);
   console.log(`  Cartesian jog, release -> decelerating:  ${fmt(decel)}   (target <= 100 ms)`);
   console.log(`  Cartesian jog, release -> standstill:    ${fmt(still)}   (target <= 300 ms)`);
   console.log(`  joint jog, release -> standstill:        ${fmt(jointStill)}   (target <= 300 ms)`);

@@ -18,6 +18,8 @@ node bench/bff_relay_bench.mjs
 if [[ -f bench/sim_bench.py ]]; then echo; echo "== simulated cell =="; python bench/sim_bench.py; fi
 echo; echo "== manual motion: hold-to-run jog through the page =="
 node bench/manual_bench.mjs
+echo; echo "== manual motion on a ros_control arm, the iiwa cell: hold-to-run jog through the page =="
+BENCH_CELL=config/iiwa-cell.yaml node bench/manual_bench.mjs
 echo; echo "== sensors page: six 100 Hz series on a phone, CPU throttled 4x =="
 node bench/sensors_bench.mjs
 echo; echo "== BFF back-pressure: slow link, stalled reader, fast clients beside a stalled one =="

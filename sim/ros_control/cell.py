@@ -17,12 +17,13 @@ from typing import Optional
 import numpy as np
 
 from ..cell_file import CellDevices
-from ..pacing import Pacer
 from ..safety import FaultBook
 from ..world import DT
 from .spec import RosControlArm, RosControlWorld
 from .trajectory import Defaults, GoalEvent, TrajectoryController
 from .world import IiwaArm, IiwaWorld
+
+MAX_CATCH_UP_S = 0.1   # sim seconds a stalled loop catches up (50 cycles at 500 Hz); a longer stall is lost
 
 log = logging.getLogger("sim.ros_control")
 
@@ -108,11 +109,21 @@ class RosControlCell:
         self.sim_time = t + DT
 
     def _loop(self) -> None:
-        pacer = Pacer(DT / self.opts.speed, self._stop)
+        """Keeps the controller's clock on the wall clock (x speed), as a real controller's is: after a stall it
+        catches up with a burst of cycles (at most MAX_CATCH_UP_S worth; a longer stall is lost). Why: commands are
+        stamped on the sender's wall clock (a streamed jog models the controller's setpoint on it), and a controller
+        clock that fell behind would make a stamped trajectory's setpoint run fast for a moment."""
+        start_wall, start_sim = time.perf_counter(), self.sim_time
         while not self._stop.is_set():
-            with self.lock:
-                self.tick()
-            pacer.wait()
+            due = start_sim + (time.perf_counter() - start_wall) * self.opts.speed
+            if due - self.sim_time > MAX_CATCH_UP_S:  # a long stall: lose that time rather than burst through it
+                start_wall, start_sim = time.perf_counter(), self.sim_time
+                due = self.sim_time
+            while self.sim_time < due and not self._stop.is_set():
+                with self.lock:
+                    self.tick()
+            # until the wall clock reaches the controller's (one cycle ahead now)
+            self._stop.wait(max(0.0, (self.sim_time - start_sim) / self.opts.speed - (time.perf_counter() - start_wall)))
 
     # ---- faults -----------------------------------------------------------------------------------------
     def trigger_fault(self, fault: str) -> tuple[bool, str]:

@@ -217,3 +217,76 @@ def test_an_unreadable_file_exits_with_2(tmp_path: Path, capsys, content: Any, e
 def test_usage(capsys) -> None:
     assert main(["a.yaml", "b.yaml"]) == EXIT_UNREADABLE
     assert "usage:" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------- ros_control groups
+IIWA = Path(__file__).resolve().parents[4] / "config" / "iiwa-cell.yaml"
+_IIWA_DOC = yaml.safe_load(IIWA.read_text(encoding="utf-8"))
+
+
+def iiwa() -> dict[str, Any]:
+    return copy.deepcopy(_IIWA_DOC)
+
+
+def iiwa_urdf(with_tip: bool) -> str:
+    """The arm as a URDF file of the robot PC: the model the sim drives, renamed; with or without the TCP link."""
+    import pybullet_data
+    text = (Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf").read_text().replace("lbr_iiwa_", "iiwa_")
+    if not with_tip:
+        return text
+    return text.replace("</robot>", '<link name="iiwa_link_ee"/><joint name="iiwa_joint_ee" type="fixed">'
+                                    '<parent link="iiwa_link_7"/><child link="iiwa_link_ee"/>'
+                                    '<origin xyz="0 0 0.06"/></joint></robot>')
+
+
+def test_the_iiwa_cell_passes(capsys) -> None:
+    report = check_cell(iiwa(), str(IIWA))
+    assert (report.problems, report.warnings) == ([], [])
+    assert main([str(IIWA)]) == EXIT_OK
+    assert capsys.readouterr().out == ""
+
+
+def test_a_urdf_file_without_the_tip_link(tmp_path: Path) -> None:
+    """A group reading its URDF from a file (relative to the cell file) is checked against that file."""
+    d = iiwa()
+    rc = d["manual"]["groups"][0]["ros_control"]
+    del rc["robot_description"]
+    rc["urdf"] = "urdf/iiwa.urdf"
+    (tmp_path / "urdf").mkdir()
+    urdf = tmp_path / "urdf" / "iiwa.urdf"
+    urdf.write_text(iiwa_urdf(with_tip=False), encoding="utf-8")
+    problems = check_cell(d, str(tmp_path / "cell.yaml")).problems
+    assert len(problems) == 1, problems
+    assert problems[0].startswith("manual.groups[0].ros_control: the URDF (urdf/iiwa.urdf) does not give the arm's "
+                                  "kinematics: tip link 'iiwa_link_ee' is not in the robot description (links: "
+                                  "iiwa_link_0, "), problems
+    urdf.write_text(iiwa_urdf(with_tip=True), encoding="utf-8")
+    assert check_cell(d, str(tmp_path / "cell.yaml")).problems == []
+    urdf.unlink()
+    problems = check_cell(d, str(tmp_path / "cell.yaml")).problems
+    assert problems == [f"manual.groups[0].ros_control.urdf: cannot read {urdf}: No such file or directory"], problems
+
+
+def test_a_configuration_outside_a_joint_limit() -> None:
+    """Checked against the simulated driver's URDF when the cell is simulated; a real arm's robot_description
+    parameter is only known when the driver connects."""
+    d = iiwa()
+    d["manual"]["groups"][0]["configurations"]["pick_approach"][3] = -2.2   # iiwa joint 4: +-2.094 rad
+    assert check_cell(d, str(IIWA)).problems == [
+        "manual.groups[0].configurations.pick_approach[3]: -2.2 rad is outside the limits of iiwa_joint_4 "
+        "[-2.094, 2.094]"]
+    d["robot"]["simulated"] = False
+    assert check_cell(d, str(IIWA)).problems == []
+
+
+@pytest.mark.parametrize("mutate,expected", [
+    (lambda d: d["manual"]["groups"][0].update(host="127.0.0.1"),
+     "manual.groups[0].host: a ros_control group has no controller host (its driver owns it)"),
+    (lambda d: d["manual"]["groups"].append(dict(copy.deepcopy(d["manual"]["groups"][0]), name="arm2")),
+     "manual.groups[1].ros_control.controller: /iiwa/PositionJointInterface_trajectory_controller moves another "
+     "group already (one motion group per trajectory controller)"),
+], ids=["host", "two groups on one controller"])
+def test_what_the_driver_refuses_in_a_ros_control_group(mutate: Callable[[dict], None], expected: str) -> None:
+    d = iiwa()
+    mutate(d)
+    assert check_cell(d, str(IIWA)).problems == [expected]

@@ -114,6 +114,26 @@ def test_reads_the_joints_in_the_groups_order_and_the_tcp_from_the_urdf(fake):
     assert arm.getRobotMode() == 100 and not arm.isProgramRunning()
 
 
+def test_connect_waits_a_moment_for_the_controller(fake):
+    """The joint states come before the action server's status: connected, the arm says RUNNING from the first
+    reading (no CONTROLLER_NOT_RUNNING blip, an error alarm, at every connect); a controller that stays silent is
+    reported as not running after the wait."""
+    checks = []
+
+    def controller_ready() -> bool:
+        checks.append(time.monotonic())
+        return len(checks) > 3  # the status arrives on the fourth look
+
+    fake.controller_ready = controller_ready  # type: ignore[method-assign]
+    arm = make_arm(fake)
+    assert len(checks) == 4 and arm.getRobotMode() == 7
+    fake.controller_ready = lambda: False  # type: ignore[method-assign]
+    t0 = time.monotonic()
+    arm = RosControlConnector(SPEC, JOINTS, fake, max_joint_speed=1.0, state_timeout=0.2,
+                              controller_timeout=0.1).receive("x")
+    assert 0.1 <= time.monotonic() - t0 < 0.5 and arm.getRobotMode() == 100
+
+
 @pytest.mark.parametrize("change, message", [
     (lambda f: setattr(f, "publishing", False), "no joint states on /iiwa/joint_states"),
     (lambda f: setattr(f, "names", tuple(JOINTS[:6])), "does not carry joint iiwa_joint_7"),
@@ -167,6 +187,10 @@ def test_an_aborted_goal_is_a_move_error_and_our_own_stop_is_not(fake):
     assert fake.cancels == 1 and fake.commands[-1] == "hold"
     pending.pop()(PREEMPTED, 0, "")   # the cancelled goal's result arrives late
     assert arm.getMoveError() == "" and arm.getAsyncOperationProgress() == -1
+    # Preempted by someone else (another client's goal or command): a fault, named as such.
+    arm.moveJ([0.4] + HOME[1:], 0.5, 1.0, True)
+    pending.pop()(PREEMPTED, 0, "")
+    assert arm.getMoveError().startswith("the trajectory was preempted: another client")
 
 
 def test_move_l_is_a_straight_line_and_an_unreachable_pose_is_refused(fake):
@@ -204,9 +228,12 @@ def wait_for(predicate, timeout=2.0):
 def test_a_joint_jog_streams_points_ahead_and_stop_holds_last(fake):
     arm = make_arm(fake)
     arm.speedJ([0.2, 0, 0, 0, 0, 0, 0], 1.0, 0.0)
-    wait_for(lambda: len(fake.commands) >= 5)
+    # It ramps up at the command's acceleration (1 rad/s^2: 0.2 s), never jumping to full speed.
+    wait_for(lambda: len(fake.commands) >= 2)
+    assert fake.commands[0].velocities[0] < 0.05
+    wait_for(lambda: fake.commands[-1].velocities[0] == pytest.approx(0.2 * arm_mod.STREAM_SPEED_FACTOR))
     p = fake.commands[-1]
-    assert p.time_from_start == pytest.approx(JOG_HORIZON) and p.velocities[0] == pytest.approx(0.2)
+    assert p.time_from_start == pytest.approx(JOG_HORIZON) and p.velocities[0] == pytest.approx(0.2 * arm_mod.STREAM_SPEED_FACTOR)
     assert p.positions[0] > HOME[0] + 0.2 * JOG_HORIZON - 1e-9  # ahead of the arm by the horizon
     arm.speedJ([-0.2, 0, 0, 0, 0, 0, 0], 1.0, 0.0)  # a new speed replaces the stream's (no second stream)
     wait_for(lambda: fake.commands[-1] != "hold" and fake.commands[-1].velocities[0] < 0)
@@ -229,10 +256,11 @@ def test_a_cartesian_jog_keeps_the_tcp_under_the_cap(fake):
 
 def test_a_jog_stops_at_a_joint_limit(fake):
     lo = -2.96  # iiwa joint 1
-    fake.q["iiwa_joint_1"] = lo + 0.02
+    fake.q["iiwa_joint_1"] = lo + 0.1
     arm = make_arm(fake)
-    arm.speedJ([-1.0, 0, 0, 0, 0, 0, 0], 1.0, 0.0)
-    wait_for(lambda: len(fake.commands) >= 3)
+    arm.speedJ([-1.0, 0, 0, 0, 0, 0, 0], 10.0, 0.0)
+    wait_for(lambda: any(p.velocities[0] < -0.05 for p in fake.commands))  # it did move towards the limit
+    wait_for(lambda: fake.commands[-1].velocities[0] == 0.0)                 # and stopped before it
     arm.speedStop()
     assert all(p.positions[0] > lo for p in fake.commands[:-1])
     assert fake.commands[-2].velocities[0] == 0.0
@@ -268,7 +296,7 @@ def driver(fake):
                      RosControlConnector(arm.ros_control, arm.joint_names, fake, limits.max_speed, state_timeout=0.2),
                      limits, joint_names=arm.joint_names, poll_rate=100.0, retry_s=0.1)
     d.start()
-    wait_for(lambda: d.connected)
+    wait_for(lambda: d.connected and d.snapshot().robot_mode == "RUNNING")  # connected, and polled once
     yield d
     d.shutdown()
 

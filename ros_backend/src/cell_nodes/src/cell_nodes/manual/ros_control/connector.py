@@ -10,15 +10,21 @@ from typing import Callable, Sequence
 from ..config import RosControlSpec
 from .arm import STATE_TIMEOUT, RosControlArm, Transport, Unreachable, load_kinematics
 
+# s to wait at connect for the trajectory controller once the joint states are there: its action server's status
+# comes at 5 Hz and the action client connects a moment after the joint states subscription.
+CONTROLLER_TIMEOUT = 1.0
+
 
 class RosControlConnector:
     def __init__(self, spec: RosControlSpec, joints: Sequence[str], transport: Transport, max_joint_speed: float,
-                 state_timeout: float = STATE_TIMEOUT, sleep: Callable[[float], None] = time.sleep) -> None:
+                 state_timeout: float = STATE_TIMEOUT, sleep: Callable[[float], None] = time.sleep,
+                 controller_timeout: float = CONTROLLER_TIMEOUT) -> None:
         self.spec = spec
         self.joints = tuple(joints)
         self.transport = transport
         self.max_joint_speed = max_joint_speed
         self.state_timeout = state_timeout
+        self.controller_timeout = controller_timeout
         self.sleep = sleep
         self._arm: RosControlArm | None = None
 
@@ -31,6 +37,12 @@ class RosControlConnector:
                 raise Unreachable(f"no joint states on {self.spec.joint_states} (is the arm's driver running?)")
             self.sleep(0.02)
         arm.sample()  # raises when the group's joints are not all there
+        # Connected with the controller's state known: else the first states after every (re)connect would say
+        # CONTROLLER_NOT_RUNNING for a moment (an error alarm, and the cell's mode switched to alarm and back).
+        # A controller that really is not running is reported so once this wait is over.
+        deadline = time.monotonic() + self.controller_timeout
+        while not self.transport.controller_ready() and time.monotonic() < deadline:
+            self.sleep(0.02)
         self._arm = arm
         return arm
 

@@ -88,7 +88,10 @@ class RosTransport:
         self._client.cancel_all_goals()
 
     def stream(self, names: Sequence[str], point: trajectory.TrajectoryPoint) -> None:
-        msg = JointTrajectory(joint_names=list(names))  # header.stamp 0: start now
+        msg = JointTrajectory(joint_names=list(names))
+        # Stamped, not 0 ("when it arrives"): the jog stream models the controller's setpoint on its own clock, and
+        # a message's transit time varying by a few ms would otherwise make the setpoint run fast for a moment.
+        msg.header.stamp = rospy.Time.now()
         msg.points = [JointTrajectoryPoint(positions=list(point.positions), velocities=list(point.velocities),
                                            time_from_start=rospy.Duration.from_sec(point.time_from_start))]
         self._command.publish(msg)
