@@ -1,6 +1,7 @@
 // The twin-arm cell's third role, `maintenance`, sees and may do exactly what config/twin-arm-cell.yaml says: its
 // pages in the menu, its pages' APIs, its features' reads and commands through /ros, and nothing that moves an arm
-// (checked through /ros and the API, not only in the menu).
+// (checked through /ros and the API, not only in the menu); yet, like every role with a page, it can stop the robot
+// ("Stop robot" on every page, /cell/manual/stop without the lease).
 import fs from 'node:fs';
 import yaml from 'js-yaml';
 import { test, expect } from '@playwright/test';
@@ -24,13 +25,20 @@ test('maintenance sees its pages and only those, in the menu and through the API
   if (!role.pages.includes('database')) expect((await page.request.get('/api/database/files')).status()).toBe(403);
   // No command of its moves the robot: it may not hold control either (it would only keep the others from it).
   expect((await page.request.post('/api/control/take', { data: {} })).status()).toBe(403);
+  // But it stops the robot: "Stop robot" is in the top bar of every page it sees (issue 28).
+  expect(config.stop).toEqual({ service: '/cell/manual/stop', type: 'std_srvs/Trigger' });
+  for (const id of role.pages) {
+    await page.goto(id === 'home' ? '/' : `/${id}`);
+    await expect(page.getByTestId('page-title'), id).toBeVisible();
+    await expect(page.getByRole('button', { name: 'Stop robot' }), id).toBeEnabled();
+  }
   for (const id of ['manual', 'process', 'routines'].filter((p) => !role.pages.includes(p))) {
     await page.goto(`/${id}`);
     await expect(page.getByTestId('access-denied'), id).toBeVisible();
   }
 });
 
-test('maintenance commands modules and resets alarms through /ros, and nothing that moves an arm goes through', async ({ page, context, baseURL }) => {
+test('maintenance commands modules, resets alarms and stops the robot through /ros, and nothing that moves an arm goes through', async ({ page, context, baseURL }) => {
   await loginAs(page, 'maintenance');
   const ros = await rosSocket(String(baseURL), await sessionCookie(context));
   /** @param {string} id @param {string} service @param {object} args */
@@ -58,6 +66,11 @@ test('maintenance commands modules and resets alarms through /ros, and nothing t
   const reset = await call('r1', '/cell/alarms/reset', {});
   expect(denied(reset)).toBe(false);
   expect(reset.result).toBe(true);
+
+  // The robot stop, without the lease: the node answers it (both arms stand still).
+  const stopped = await call('s3', '/cell/manual/stop', {});
+  expect(denied(stopped)).toBe(false);
+  expect(stopped.result, JSON.stringify(stopped.values)).toBe(true);
 
   // Never motion: moves, tool actions, the process and routines are refused before they reach ROS.
   const group = cell.manual.groups[0].name;

@@ -1,6 +1,6 @@
 // @vitest-environment node
 import { describe, it, expect } from 'vitest';
-import { menuPages, routeAccess, safeNext, featureByPath, pageTitle } from '../../src/lib/core/routing.js';
+import { menuPages, routeAccess, safeNext, featureByPath, pageTitle, robotStop } from '../../src/lib/core/routing.js';
 import { features } from '../../src/lib/features/index.js';
 
 describe('routing from the feature list', () => {
@@ -72,5 +72,29 @@ describe('routing from the feature list', () => {
     expect(safeNext('https://evil.example')).toBe('/');
     expect(safeNext('/login?next=/x')).toBe('/');
     expect(safeNext(null)).toBe('/');
+  });
+});
+
+describe('"Stop robot" in the top bar', () => {
+  const stop = { service: '/cell/manual/stop', type: 'std_srvs/Trigger' };
+  it('is shown for every role that sees any page, one that never moves the robot included', () => {
+    // The twin cell's maintenance: no manual, process or routines page, no command that moves an arm.
+    const maintenance = { pages: [{ id: 'home' }, { id: 'modules' }, { id: 'alarms' }, { id: 'sensors' }, { id: 'parameters' }], commands: ['modules', 'alarms'], stop };
+    expect(robotStop(maintenance)).toEqual(stop);
+    // The iiwa operator: the manual page without its commands.
+    const iiwaOperator = { pages: [{ id: 'home' }, { id: 'manual' }], commands: ['process', 'alarms'], stop };
+    expect(robotStop(iiwaOperator)).toEqual(stop);
+    expect(robotStop({ pages: [{ id: 'home' }], stop })).toEqual(stop);
+  });
+  it('defaults the type to std_srvs/Trigger', () => {
+    expect(robotStop({ pages: [{ id: 'home' }], stop: { service: '/s' } })).toEqual({ service: '/s', type: 'std_srvs/Trigger' });
+  });
+  it('is not shown without a page, or when the cell has no robot stop (or an older answer lacks it)', () => {
+    expect(robotStop({ pages: [], stop })).toBeNull();
+    expect(robotStop({ pages: [{ id: 'home' }], stop: null })).toBeNull();
+    expect(robotStop({ pages: [{ id: 'home' }] })).toBeNull();
+    expect(robotStop({ pages: [{ id: 'home' }], stop: { service: '' } })).toBeNull();
+    expect(robotStop(null)).toBeNull();
+    expect(robotStop(undefined)).toBeNull();
   });
 });

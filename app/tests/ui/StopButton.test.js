@@ -31,7 +31,7 @@ describe('StopButton', () => {
     expect(call).toHaveBeenCalledWith('/s', 'std_srvs/Trigger', {}, { timeoutMs: 3000 });
   });
 
-  it('is not drawn when the robot cannot move for this role (stop: null)', () => {
+  it('is not drawn without a stop service (stop: null: a role with no page, or a cell without a robot stop)', () => {
     render(StopButton, { stop: null, call: vi.fn() });
     expect(screen.queryByRole('button', { name: 'Stop robot' })).toBeNull();
   });

@@ -76,7 +76,10 @@ test('pages and config are filtered by role', () => {
   assert.deepEqual(Object.keys(c.features).sort(), ['alarms', 'manual', 'modules', 'process', 'sensors', 'video']);
   assert.deepEqual(c.commands, ['modules', 'process', 'alarms']);
   assert.deepEqual(c.control, { take_over: false });
-  assert.deepEqual(c.stop, { service: '/cell/manual/stop', type: 'std_srvs/Trigger' }, 'the process moves the robot');
+  assert.deepEqual(c.stop, { service: '/cell/manual/stop', type: 'std_srvs/Trigger' }, 'every role that sees a page stops the robot');
+  const watcher = { ...cell, roles: { ...cell.roles, watcher: { pages: ['sensors'] } } };
+  assert.deepEqual(configFor(watcher, FEATURES, 'watcher').stop, c.stop, 'a role that never moves the robot still stops it');
+  assert.equal(configFor(cell, FEATURES, 'nobody').stop, null, 'no page, no stop');
   const a = configFor(cell, FEATURES, 'admin');
   assert.equal(a.control.take_over, true);
   assert.equal(a.features.parameters.csv, undefined, 'paths on the robot PC stay there');

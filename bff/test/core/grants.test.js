@@ -5,7 +5,9 @@ import path from 'node:path';
 import { loadCell } from '../../src/core/config/cell.js';
 import { REPO_ROOT } from '../../src/core/config/env.js';
 import { grantsFor, motionNames, stopNames, mayMoveRobot, argumentChecks } from '../../src/core/access/grants.js';
-import { namesOf, KINDS } from '../../src/core/features/feature.js';
+import { configFor } from '../../src/core/access/pages.js';
+import { matchesAny } from '../../src/core/access/rules.js';
+import { namesOf, KINDS, isEmpty } from '../../src/core/features/feature.js';
 import { createOpGuard } from '../../src/core/ros/op-guard.js';
 import { ControlLease } from '../../src/core/control/lease.js';
 import { FEATURES } from '../../src/features/index.js';
@@ -71,7 +73,7 @@ for (const f of FEATURES) {
   }
 }
 
-test('stop is never lease-gated: any role that sees a page that moves the robot may stop it', () => {
+test('stop is never lease-gated: any role that sees a page that moves the robot may use every stop name', () => {
   const stops = stopNames(cell, FEATURES);
   assert.ok(stops.call_service.includes('/cell/manual/stop'));
   for (const f of FEATURES.filter((x) => mayMoveRobot({ ...cell, roles: { r: { pages: [x.id] } } }, FEATURES, 'r'))) {
@@ -81,11 +83,82 @@ test('stop is never lease-gated: any role that sees a page that moves the robot 
       for (const name of stops[kind]) assert.equal(send(ctx('watcher', 'w'), msgFor(kind, name, 's')).forward, true, `${f.id}: ${name}`);
     }
   }
+  // A page that cannot move the robot gives the robot stop ("Stop robot") and no other stop name.
   const { ctx, send } = guardFor({ reader: { pages: ['sensors'] } });
-  assert.equal(send(ctx('reader', 'r'), msgFor('call_service', '/cell/manual/stop', 's')).forward, false, 'a page that cannot move the robot gives no stop');
+  assert.equal(send(ctx('reader', 'r'), msgFor('call_service', '/cell/manual/stop', 's')).forward, true, 'the robot stop');
+  for (const kind of ['publish', 'call_service']) {
+    for (const name of stops[kind].filter((n) => n !== '/cell/manual/stop')) {
+      assert.equal(send(ctx('reader', 'r'), msgFor(kind, name, 's')).forward, false, `no ${name}`);
+    }
+  }
 });
 
-test('a role reads what its pages read, and only that (plus the operation mode)', () => {
+test('every role that sees any page may call the robot stop, whatever its pages, and gains nothing else with it', () => {
+  const reader = grantsFor({ ...cell, roles: { r: { pages: ['home'] } } }, FEATURES, 'r');
+  assert.deepEqual(reader.call_service, ['/cell/get_mode', '/cell/manual/stop']);
+  assert.deepEqual(reader.publish, []);
+  assert.deepEqual(reader.subscribe, ['/cell/mode'], 'the button reads nothing: it needs only the ROS link');
+  const none = grantsFor({ ...cell, roles: { r: { pages: [] } } }, FEATURES, 'r');
+  assert.ok(!none.call_service.includes('/cell/manual/stop'), 'a role without a page sees no Stop button and gets no stop');
+  // A cell without the manual section has no robot stop to grant.
+  const { manual: _m, ...noManual } = cell;
+  const bare = { ...noManual, pages: cell.pages.filter((p) => !['manual', 'routines'].includes(p.id)), roles: { r: { pages: ['home'] } } };
+  assert.deepEqual(grantsFor(bare, FEATURES, 'r').call_service, ['/cell/get_mode']);
+});
+
+// Every role of every shipped cell: "Stop robot" (the robot stop, without the lease) yes; manual moves only with
+// the manual commands (and then only with the lease); the lease itself only for a role with a motion command.
+const CELLS = ['demo-cell.yaml', 'twin-arm-cell.yaml', 'iiwa-cell.yaml'];
+const movers = new Set(FEATURES.filter((f) => !isEmpty(namesOf(f, 'motion', cell))).map((f) => f.id));
+for (const file of CELLS) {
+  const c = loadCell(path.join(REPO_ROOT, 'config', file), FEATURES);
+  for (const [role, def] of Object.entries(c.roles)) {
+    const manual = (def.commands || []).includes('manual');
+    test(`${file} ${role}: calls /cell/manual/stop without the lease; ${manual ? 'jogs and moves with the lease' : 'never jogs or moves'}`, () => {
+      assert.ok(def.pages.length > 0, 'every role of a shipped cell sees a page');
+      const grants = new Map(Object.keys(c.roles).map((r) => [r, grantsFor(c, FEATURES, r)]));
+      const lease = new ControlLease();
+      const guard = createOpGuard({ grantsOf: (r) => grants.get(r), motion: motionNames(c, FEATURES), lease, audit: { record() {} }, checkArgs: argumentChecks(c, FEATURES) });
+      const cx = (sid) => ({ session: { username: `${role}-${sid}`, role, sid }, ip: '127.0.0.1', rosapiCalls: new Map(), lastPublishAudit: new Map() });
+      const me = cx('me');
+      const send = (m) => guard.inspect(me, Buffer.from(JSON.stringify(m)), false);
+      const group = c.manual.groups[0].name;
+      const jog = { op: 'publish', id: 'j', topic: '/cell/manual/jog', msg: { group, mode: 'joint', axis: 0, direction: 1, speed: 0.1, frame: 'base' } };
+      const move = { op: 'call_service', id: 'm', service: '/cell/manual/move_named', args: { group, name: 'home', speed: 0.1, acceleration: 0.1 } };
+      const tool = { op: 'call_service', id: 't', service: '/cell/manual/tool', args: {} };
+      const stop = { op: 'call_service', id: 's', service: '/cell/manual/stop', args: {} };
+
+      assert.deepEqual(configFor(c, FEATURES, role).stop, { service: '/cell/manual/stop', type: 'std_srvs/Trigger' }, 'the Stop button is shown');
+      // Someone else holds control: the stop still goes through, and needs no lease of its own.
+      assert.ok(lease.take(cx('other').session).ok);
+      assert.equal(send(stop).forward, true, 'stop while another holds control');
+      lease.release(cx('other').session);
+      assert.equal(send(stop).forward, true, 'stop without the lease');
+
+      for (const m of [jog, move, tool]) {
+        const [kind, name] = m.op === 'publish' ? ['publish', m.topic] : ['call_service', m.service];
+        if (!manual && matchesAny(def.ros?.[kind], name)) continue; // the escape hatch is the cell file's own business
+        const out = send(m);
+        assert.equal(out.forward, false, `${name} without the lease`);
+        assert.match(String(out.replies[0].data), manual ? /needs control: take control first/ : /not allowed to/);
+      }
+      if (manual) {
+        assert.ok(lease.take(me.session).ok);
+        for (const m of [jog, move, tool]) assert.equal(send(m).forward, true, `${m.topic || m.service} with the lease`);
+      }
+      // Who may hold the lease at all (bff/src/app.js: a command of a feature that moves the robot).
+      const mayControl = (def.commands || []).some((x) => movers.has(x));
+      if (role === 'maintenance') assert.equal(mayControl, false, 'maintenance never holds control');
+      if (!manual) {
+        const g = grants.get(role);
+        assert.ok(!g.publish.includes('/cell/manual/jog'));
+        for (const s of ['/cell/manual/move_named', '/cell/manual/move_relative', '/cell/manual/move_pose', '/cell/manual/tool']) assert.ok(!g.call_service.includes(s), s);
+      }
+    });
+  }
+}
+
+test('a role reads what its pages read, and only that (plus the operation mode and the robot stop)', () => {
   for (const f of FEATURES) {
     const g = grantsFor({ ...cell, roles: { r: { pages: [f.id] } } }, FEATURES, 'r');
     const reads = namesOf(f, 'reads', cell);
@@ -94,7 +167,7 @@ test('a role reads what its pages read, and only that (plus the operation mode)'
   }
   const none = grantsFor({ ...cell, roles: { r: { pages: ['home'] } } }, FEATURES, 'r');
   assert.deepEqual(none.subscribe, ['/cell/mode']);
-  assert.deepEqual(none.call_service, ['/cell/get_mode']);
+  assert.deepEqual(none.call_service, ['/cell/get_mode', '/cell/manual/stop'], 'plus the robot stop, as every role with a page');
   assert.deepEqual(none.publish, []);
 });
 

@@ -76,6 +76,21 @@ export function pageTitle(access, allowed) {
 }
 
 /**
+ * The top bar's "Stop robot": on every page for every role that sees any page, the same rule as the BFF's (it sends
+ * `stop` in /api/config to such a role and lets it call that service without the control lease), a role that never
+ * moves the robot included: whoever watches the cell must be able to stop it. Null: no button (no page, or a cell
+ * without a robot stop).
+ * @param {{ pages?: { id: string }[], stop?: { service: string, type?: string } | null } | null | undefined} config
+ * @returns {{ service: string, type: string } | null}
+ */
+export function robotStop(config) {
+  const stop = config?.stop;
+  if (!stop || typeof stop.service !== 'string' || !stop.service) return null;
+  if (!Array.isArray(config?.pages) || config.pages.length === 0) return null;
+  return { service: stop.service, type: stop.type || 'std_srvs/Trigger' };
+}
+
+/**
  * Where to go after login: only same-origin absolute paths, never the login page itself.
  * @param {string | null | undefined} next
  */

@@ -24,7 +24,7 @@ const PENDING_LOGOUT_KEY = 'cell-ui.logout-pending';
  * @property {string[]} [commands]  feature ids whose commands this role may send
  * @property {{ take_over: boolean }} [control]  whether this role may take the control lease over
  * @property {{ service: string, type: string } | null} [stop]  the robot stop service (std_srvs/Trigger),
- *   present when the role sees a page whose feature can move the robot
+ *   present for every role that sees any page (whether or not it moves the robot)
  */
 
 /** @typedef {'unknown' | 'authenticated' | 'logged-out'} AuthState */

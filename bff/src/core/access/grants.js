@@ -2,7 +2,10 @@
 // - every role reads the operation mode (the shell shows it everywhere);
 // - a role reads what the features of its pages read;
 // - it sends a feature's commands where `roles.<role>.commands` lists that feature;
-// - it may stop the robot wherever one of its pages can move it (stop is never lease-gated);
+// - every role that sees any page may call the robot stop (the page kit's "Stop robot", a feature's `robotStop`):
+//   whoever watches the cell must be able to stop it, moving it or not; that one call, nothing that moves;
+// - the features' other stop names (process stop/pause, routines stop) go to roles that see a page that can
+//   move the robot; no stop name is ever lease-gated;
 // - `roles.<role>.ros` adds raw grants (an escape hatch).
 import { namesOf, mergeNames, isEmpty } from '../features/feature.js';
 
@@ -17,6 +20,17 @@ export function mayMoveRobot(/** @type {Cell} */ cell, /** @type {Feature[]} */ 
     const f = byId(features, p);
     return !!f && !isEmpty(namesOf(f, 'motion', cell));
   });
+}
+
+/** Does the role see any page of the cell? (Such a role gets the robot stop.) */
+export function seesAnyPage(/** @type {Cell} */ cell, /** @type {string} */ role) {
+  return (cell.roles[role]?.pages || []).some((p) => cell.pages.some((x) => x.id === p));
+}
+
+/** The cell's robot stop (the first feature with a `robotStop` whose section the cell has), or null. */
+export function cellRobotStop(/** @type {Cell} */ cell, /** @type {Feature[]} */ features) {
+  const f = features.find((x) => x.robotStop && (!x.schema || cell[x.id] !== undefined));
+  return f?.robotStop ?? null;
 }
 
 /** @param {Cell} cell @param {Feature[]} features */
@@ -43,6 +57,8 @@ export function grantsFor(cell, features, role) {
     if (f && def.pages.includes(c)) parts.push(namesOf(f, 'commands', cell), namesOf(f, 'motion', cell));
   }
   if (mayMoveRobot(cell, features, role)) parts.push(stopNames(cell, features));
+  const robotStop = robotStopFor(cell, features, role);
+  if (robotStop) parts.push({ call_service: [robotStop.service] });
   parts.push(def.ros || {});
   return mergeNames(...parts);
 }
@@ -52,11 +68,12 @@ export function motionNames(/** @type {Cell} */ cell, /** @type {Feature[]} */ f
   return mergeNames(...features.map((f) => namesOf(f, 'motion', cell)));
 }
 
-/** The service behind the app's "Stop robot" button, for a role that may move the robot. */
+/**
+ * The service behind the app's "Stop robot" button, for every role that sees any page (a role that never moves
+ * the robot still stops it: it may be the one standing next to the cell). Never lease-gated.
+ */
 export function robotStopFor(/** @type {Cell} */ cell, /** @type {Feature[]} */ features, /** @type {string} */ role) {
-  if (!mayMoveRobot(cell, features, role)) return null;
-  const f = features.find((x) => x.robotStop && (!x.schema || cell[x.id] !== undefined));
-  return f?.robotStop ?? null;
+  return seesAnyPage(cell, role) ? cellRobotStop(cell, features) : null;
 }
 
 /**

@@ -35,8 +35,9 @@ SERVICE_TIMEOUT = 0.5   # s to find an IO service
 
 
 class RosTransport:
-    def __init__(self, spec: RosControlSpec, cell_dir: str = ".") -> None:
+    def __init__(self, spec: RosControlSpec, cell_dir: str = ".", joints: Sequence[str] = ()) -> None:
         self.spec = spec
+        self._ours = frozenset(joints)  # other arms' drivers may publish on the same topic (often /joint_states)
         self.cell_dir = cell_dir
         self._joint: Optional[JointSample] = None
         self._status_at = -1e9
@@ -52,6 +53,8 @@ class RosTransport:
 
     # ---- subscriptions
     def _on_joints(self, msg: JointState) -> None:
+        if self._ours and self._ours.isdisjoint(msg.name):
+            return  # another arm's message
         self._joint = JointSample(tuple(msg.name), tuple(msg.position), tuple(msg.velocity), time.monotonic())
 
     def _on_status(self, _msg: GoalStatusArray) -> None:
