@@ -3,28 +3,13 @@
 // simulated iiwa driver. Where the cube ends up is read from outside the app: the sim's ground truth (/sim/objects).
 import fs from 'node:fs';
 import yaml from 'js-yaml';
-import { WebSocket } from 'ws';
 import { test, expect } from '@playwright/test';
 import { loginAs } from '../lib/app.js';
+import { watchParts } from '../lib/robot.js';
 
 const cell = /** @type {any} */ (yaml.load(fs.readFileSync(String(process.env.E2E_CELL_CONFIG), 'utf8')));
 const pocket = cell.simulation.stations.find((/** @type {any} */ s) => s.kind === 'fixture').pockets[0];
 const base = cell.simulation.arms[0].base; // the arm's base in the world: the poses are in its frame
-
-/** The parts' world positions from the sim (/sim/objects), on the stack's own rosbridge. */
-async function watchParts() {
-  const ws = new WebSocket(String(process.env.E2E_ROSBRIDGE_URL));
-  /** @type {{x: number, y: number, z: number}[]} */
-  let parts = [];
-  ws.on('message', (d) => {
-    const m = JSON.parse(d.toString());
-    if (m.op === 'publish' && m.topic === '/sim/objects') parts = m.msg.poses.map((/** @type {any} */ p) => p.position);
-  });
-  await new Promise((resolve, reject) => { ws.once('open', resolve); ws.once('error', reject); });
-  ws.send(JSON.stringify({ op: 'subscribe', id: 'parts', topic: '/sim/objects', type: 'geometry_msgs/PoseArray' }));
-  await expect.poll(() => parts.length, { timeout: 20_000 }).toBeGreaterThan(0);
-  return { parts: () => parts, close: () => ws.close() };
-}
 
 test('one cycle picks the first cube with the vacuum cup and places it in the first pocket', async ({ page }) => {
   test.setTimeout(240_000);

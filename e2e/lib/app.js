@@ -23,6 +23,16 @@ export async function openMenu(page) {
   await expect(page.getByTestId('user-name')).toBeVisible();
 }
 
+/**
+ * In-app navigation through the menu (what lives in the app, like a routine draft, stays), to the page `title`.
+ * @param {import('@playwright/test').Page} page @param {string} title the page's title in the cell file
+ */
+export async function goToPage(page, title) {
+  await openMenu(page);
+  await page.getByRole('navigation', { name: 'Main menu' }).getByRole('link', { name: title, exact: true }).click();
+  await expect(page.getByTestId('page-title')).toHaveText(title);
+}
+
 /** @param {import('@playwright/test').BrowserContext} context */
 export async function sessionCookie(context) {
   return (await context.cookies()).find((c) => c.name === 'cell_session');

@@ -125,3 +125,27 @@ export async function watchTcp(group, url = process.env.E2E_ROSBRIDGE_URL || '')
     close: () => ws.close(),
   };
 }
+
+/**
+ * The parts' world positions from the sim's ground truth (/sim/objects, 5 Hz; a real cell has no such topic), on
+ * the stack's own rosbridge.
+ * @param {string} [url]
+ * @returns {Promise<{ parts: () => {x: number, y: number, z: number}[], close: () => void }>}
+ */
+export async function watchParts(url = process.env.E2E_ROSBRIDGE_URL || '') {
+  const ws = new WebSocket(url);
+  /** @type {{x: number, y: number, z: number}[]} */
+  let parts = [];
+  ws.on('message', (d) => {
+    const m = JSON.parse(d.toString());
+    if (m.op === 'publish' && m.topic === '/sim/objects') parts = m.msg.poses.map((/** @type {any} */ p) => p.position);
+  });
+  await new Promise((resolve, reject) => { ws.once('open', resolve); ws.once('error', reject); });
+  ws.send(JSON.stringify({ op: 'subscribe', id: 'parts', topic: '/sim/objects', type: 'geometry_msgs/PoseArray' }));
+  const first = Date.now();
+  while (!parts.length) {
+    if (Date.now() - first > 20_000) throw new Error('no /sim/objects from the simulated cell within 20 s');
+    await new Promise((r) => setTimeout(r, 20));
+  }
+  return { parts: () => parts, close: () => ws.close() };
+}

@@ -4,7 +4,7 @@
 import fs from 'node:fs';
 import yaml from 'js-yaml';
 import { test, expect } from '@playwright/test';
-import { loginAs, openMenu } from '../lib/app.js';
+import { loginAs, goToPage } from '../lib/app.js';
 import { watchRobot, watchTcp } from '../lib/robot.js';
 
 const cell = /** @type {any} */ (yaml.load(fs.readFileSync(String(process.env.E2E_CELL_CONFIG), 'utf8')));
@@ -26,11 +26,7 @@ test.beforeAll(async () => {
 test.afterAll(() => [tcp, arm, otherArm].forEach((w) => w?.close()));
 
 /** In-app navigation (the draft lives in the app). @param {import('@playwright/test').Page} page @param {string} id */
-async function go(page, id) {
-  await openMenu(page);
-  await page.getByRole('navigation', { name: 'Main menu' }).getByRole('link', { name: title(id), exact: true }).click();
-  await expect(page.getByTestId('page-title')).toHaveText(title(id));
-}
+const go = (page, id) => goToPage(page, title(id));
 
 async function standstill() {
   await expect.poll(async () => (await arm.observe(25)).maxSpeed, { timeout: 10_000 }).toBeLessThan(1e-3);

@@ -218,10 +218,11 @@ def test_a_stopped_controller_refuses_moves_and_jogs(fake):
 
 
 # ---------------------------------------------------------------------------------------------- jogs
-def wait_for(predicate, timeout=2.0):
+def wait_for(predicate, timeout=10.0):
     deadline = time.monotonic() + timeout
     while not predicate():
-        assert time.monotonic() < deadline, "timed out"
+        # A jog stream that died says so at once (its thread's name), rather than as a timeout.
+        assert time.monotonic() < deadline, f"timed out; threads: {sorted(t.name for t in threading.enumerate())}"
         time.sleep(0.005)
 
 
