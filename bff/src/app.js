@@ -99,7 +99,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
   });
   // The features' bodies are validated after their page guard (below); the core's here.
   const featurePaths = new Set(features.flatMap((f) => Object.keys(f.openapi || {})));
-  app.use(validateRequests(openapi, { include: (p) => !featurePaths.has(p) }));
+  app.use(validateRequests(openapi, { include: (p) => !featurePaths.has(p), audit }));
   app.get('/api/health', async (req, res) => res.json(await healthReport()));
   app.get('/api/openapi.json', (req, res) => res.json(openapi));
   app.use(authRoutes({
@@ -118,7 +118,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     if (!f.routes) continue;
     app.use(f.routes({
       cell, section: cell[f.id], cellFile: env.cellConfig, env, users, audit, healthReport, log,
-      guard: [requireSession, requirePage(cell, f.id), validateRequests(openapi, { include: (p) => featurePaths.has(p) })],
+      guard: [requireSession, requirePage(cell, f.id), validateRequests(openapi, { include: (p) => featurePaths.has(p), audit })],
     }));
   }
   app.use('/api', (req, res) => res.status(404).json({ error: `no such API: ${req.method} ${req.originalUrl.slice(0, 300)}` }));

@@ -193,3 +193,19 @@ test('httpError maps client errors to their 4xx and everything else to 500', () 
   assert.equal(multipartError(new Error('Unexpected end of form')).status, 400);
   assert.equal(multipartError(Object.assign(new Error('ENOSPC'), { code: 'ENOSPC', syscall: 'write' })).status, 500, 'a full disk is ours');
 });
+
+test('a body refused by validation is audited like any refusal: who, which route, why', async () => {
+  const post = (p, body, type = 'application/json') => raw('POST', p, { body, headers: { 'content-type': type } });
+  const auditLines = () => fs.readFileSync(path.join(t.dataDir, 'audit.log'), 'utf8').trim().split('\n').map((l) => JSON.parse(l));
+  const before = auditLines().length;
+  expectError(await post('/api/control/take', '{"force":"yes"}'), 400, /\/force: must be boolean/, 'a wrong type');
+  expectError(await post('/api/database/files/parts.csv/restore', 'backup=x', 'application/x-www-form-urlencoded'), 415, /expected application\/json/, 'a form');
+  const added = auditLines().slice(before).filter((e) => e.op === 'request.invalid');
+  assert.equal(added.length, 2, JSON.stringify(auditLines().slice(before)));
+  assert.deepEqual(added.map((e) => [e.user, e.role, e.target, e.outcome]), [
+    ['admin', 'admin', 'POST /api/control/take', 'denied'],
+    ['admin', 'admin', 'POST /api/database/files/{name}/restore', 'denied'],
+  ]);
+  assert.match(added[0].detail, /^400: invalid request body at \/force: must be boolean/);
+  assert.match(added[1].detail, /^415: expected application\/json/);
+});

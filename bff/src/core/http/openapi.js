@@ -170,9 +170,11 @@ export function operations(openapi) {
  * the access checks, so a caller who may not use a route learns nothing about its rules (and the route's own refusal,
  * audited, is what it gets): an operation that needs a session is left to its route when there is none, and the
  * features mount their own validator after their page guard (`include` picks the document paths one validator owns).
- * @param {typeof core} openapi @param {{include?: (path: string) => boolean}} [o]
+ * A refused body (400, 415) is audited like any other refusal (op `request.invalid`, the route as target).
+ * @param {typeof core} openapi
+ * @param {{include?: (path: string) => boolean, audit?: {record: (e: object) => void}}} [o]
  */
-export function validateRequests(openapi, { include = () => true } = {}) {
+export function validateRequests(openapi, { include = () => true, audit } = {}) {
   const ajv = new Ajv2020({ allErrors: true, strict: false, verbose: true });
   const ops = operations(openapi);
   /** @type {Map<object, import('ajv').ValidateFunction>} */
@@ -191,12 +193,19 @@ export function validateRequests(openapi, { include = () => true } = {}) {
     if (needsSession(found.op) && !req.session) return next();
     const body = found.op.requestBody;
     if (!body.required && !Number(req.headers['content-length'] || 0) && !req.headers['transfer-encoding']) return next();
-    if (!req.is('application/json')) return res.status(415).json({ error: 'expected application/json' });
+    /** @param {number} status @param {string} error */
+    const refuse = (status, error) => {
+      const s = /** @type {any} */ (req).session;
+      audit?.record({ user: s?.username ?? null, role: s?.role ?? null, ip: req.ip || null, op: 'request.invalid',
+        target: `${req.method} ${found.path}`, outcome: 'denied', detail: `${status}: ${error}` });
+      return res.status(status).json({ error });
+    };
+    if (!req.is('application/json')) return refuse(415, 'expected application/json');
     if (!validate(req.body)) {
       const e = validate.errors[0];
       // A pattern is long and says little to a user: name the rule's description or the field instead.
       const why = e.keyword === 'pattern' ? `does not have the required form${e.parentSchema?.description ? ` (${e.parentSchema.description})` : ''}` : e.message;
-      return res.status(400).json({ error: `invalid request body${e.instancePath ? ' at ' + e.instancePath : ''}: ${why}` });
+      return refuse(400, `invalid request body${e.instancePath ? ' at ' + e.instancePath : ''}: ${why}`);
     }
     next();
   };
