@@ -1,7 +1,7 @@
 #!/usr/bin/env node
 // npm run audit -- verify [--data-dir DIR]: checks the audit log's hash chain (bff/src/core/audit/verify.js).
-// Exit 0: intact (one summary line); 1: altered, removed, inserted or torn entries (the first one is printed);
-// 2: bad arguments or an unreadable data dir.
+// Exit 0: intact (one summary line, which also lists the torn writes and lagging heads the BFF repaired at start);
+// 1: altered, removed, inserted or torn entries (the first one is printed); 2: bad arguments or an unreadable data dir.
 import fs from 'node:fs';
 import path from 'node:path';
 import { readEnv } from '../core/config/env.js';
@@ -11,7 +11,8 @@ const USAGE = `usage: npm run audit -- verify [--data-dir DIR]
        npm run audit -- help
 verify: checks the hash chain of DIR/audit.log, its rotated files and DIR/audit.head.
 DIR defaults to DATA_DIR (default .data in the repository).
-Exit 0: intact; 1: entries altered, removed, inserted or torn (the first is printed); 2: usage.`;
+Exit 0: intact (repairs the BFF made at start after a crash are listed); 1: entries altered, removed, inserted or
+torn (the first is printed); 2: usage.`;
 
 class UsageError extends Error {}
 

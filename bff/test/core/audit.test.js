@@ -195,35 +195,126 @@ test('tampering across a rotation boundary is caught in the right file', () => {
   assertProblem(verify(dir), 'removed', 'audit.log', 1, seqLast + 1, new RegExp(`seq jumps from ${firstOf1 - 1} to ${seqLast + 1}`));
 });
 
-test('a torn last line does not stop the log from opening; the chain resumes from the last valid entry; verify reports it', () => {
+test('a torn last line is cut off at start, the cut recorded in the chain; the chain resumes after the last valid entry', () => {
   const { dir } = writeLog();
-  fs.appendFileSync(path.join(dir, 'audit.log'), '{"seq":26,"time":"2026-01-0');
+  const fragment = '{"seq":26,"time":"2026-01-0';
+  fs.appendFileSync(path.join(dir, 'audit.log'), fragment);
   const n = read(dir, 'audit.log').length;
-  let v = verify(dir);
-  assertProblem(v, 'torn', 'audit.log', n, null, /^audit\.log line \d+: torn: incomplete last line/);
-  assert.match(v.summary, /otherwise intact: \d+ entries, seq \d+\.\.25/);
+  assertProblem(verify(dir), 'torn', 'audit.log', n, null, /^audit\.log line \d+: torn: incomplete last line/);
 
   const log = new AuditLog({ dir, maxBytes: 100000, keep: 3 });
-  assert.equal(log.seq, 25);
+  assert.equal(log.seq, 26, 'the repair is entry 26');
+  const lines = read(dir, 'audit.log');
+  assert.equal(lines.length, n, 'the fragment is gone, the repair entry in its place');
+  const repair = JSON.parse(lines.at(-1));
+  assert.deepEqual({ seq: repair.seq, op: repair.op, target: repair.target, outcome: repair.outcome, user: repair.user },
+    { seq: 26, op: 'audit.torn_write', target: 'audit.log', outcome: 'failed', user: null });
+  assert.match(repair.detail, new RegExp(`^cut ${Buffer.byteLength(fragment)} bytes: the incomplete last line of audit\\.log`));
   log.record(entry('after'));
-  const last = JSON.parse(read(dir, 'audit.log').at(-1));
-  assert.equal(last.seq, 26);
-  assert.equal(last.target, 'after', 'the new entry is on a line of its own');
-  v = verify(dir);
-  assertProblem(v, 'torn', 'audit.log', n, null, /torn: not a complete entry \(an interrupted write; the chain runs on around it\)/);
-  assert.equal(v.lastSeq, 26);
-  assert.equal(log.query({ limit: 1 }).entries[0].target, 'after');
+  assert.equal(JSON.parse(read(dir, 'audit.log').at(-1)).target, 'after');
+  const v = verify(dir);
+  assert.equal(v.ok, true, v.summary);
+  assert.equal(v.lastSeq, 27);
+  assert.deepEqual(v.repairs, [{ kind: 'torn_write', file: 'audit.log', line: n, seq: 26, detail: repair.detail }]);
+  assert.match(v.summary, new RegExp(`^audit log intact: .*; 1 torn write repaired at start \\(seq 26 in audit\\.log line ${n}: cut ${Buffer.byteLength(fragment)} bytes`));
+  assert.doesNotMatch(v.summary, /\n/);
+
+  // Nothing more to repair at the next start.
+  assert.equal(new AuditLog({ dir, maxBytes: 100000, keep: 3 }).seq, 27);
+  assert.equal(read(dir, 'audit.log').length, n + 1);
 });
 
-test('a torn line does not hide a later tamper', () => {
-  const { dir } = writeLog();
+test('a torn last line in a file of its own, and one only missing its newline', () => {
+  // The whole current file is a fragment (a crash in the first write after a rotation): cut to empty.
+  let { dir, log } = writeLog(12);
+  log.rotate();
+  fs.writeFileSync(path.join(dir, 'audit.log'), '{"seq":13,"ti');
+  log = new AuditLog({ dir, maxBytes: 1400, keep: 3 });
+  assert.equal(log.seq, 13);
+  assert.equal(JSON.parse(read(dir, 'audit.log')[0]).op, 'audit.torn_write');
+  assert.equal(verify(dir).ok, true, verify(dir).summary);
+
+  // A complete entry whose newline did not make it: ended, not cut, and nothing recorded.
+  ({ dir } = writeLog(7));
+  const text = fs.readFileSync(path.join(dir, 'audit.log'), 'utf8');
+  fs.writeFileSync(path.join(dir, 'audit.log'), text.slice(0, -1));
+  log = new AuditLog({ dir, maxBytes: 100000, keep: 3 });
+  assert.equal(log.seq, 7);
+  assert.equal(fs.readFileSync(path.join(dir, 'audit.log'), 'utf8'), text);
+  const v = verify(dir);
+  assert.equal(v.ok, true, v.summary);
+  assert.deepEqual(v.repairs, []);
+});
+
+test('the repair at start touches no complete line: tampering stays visible, also after a repaired torn line', () => {
+  // A tampered line in the middle, then a torn last line: the torn line is repaired, the tamper still fails.
+  let { dir } = writeLog();
+  let at = locate(dir, 23);
+  edit(dir, at.name, (lines) => { lines[at.line - 1] = lines[at.line - 1].replace('"u"', '"v"'); });
   fs.appendFileSync(path.join(dir, 'audit.log'), '{"seq":26,"ti');
-  const log = new AuditLog({ dir, maxBytes: 100000, keep: 3 });
+  new AuditLog({ dir, maxBytes: 100000, keep: 3 });
+  assertProblem(verify(dir), 'altered', at.name, at.line, 23, /hash does not match its content/);
+
+  // A complete last line that fails the chain is left as it is (and not taken for a lagging head either).
+  ({ dir } = writeLog());
+  const before = fs.readFileSync(path.join(dir, 'audit.log'), 'utf8');
+  edit(dir, 'audit.log', (lines) => { lines[lines.length - 1] = lines.at(-1).replace('"u"', '"v"'); });
+  const tampered = fs.readFileSync(path.join(dir, 'audit.log'), 'utf8');
+  assert.notEqual(tampered, before);
+  let log = new AuditLog({ dir, maxBytes: 100000, keep: 3 });
+  assert.equal(fs.readFileSync(path.join(dir, 'audit.log'), 'utf8'), tampered);
+  assertProblem(verify(dir), 'altered', 'audit.log', read(dir, 'audit.log').length, 25, /hash does not match its content/);
+
+  // Tampering after a repaired torn line is caught.
+  ({ dir } = writeLog());
+  fs.appendFileSync(path.join(dir, 'audit.log'), '{"seq":26,"ti');
+  log = new AuditLog({ dir, maxBytes: 100000, keep: 3 });
   log.record(entry('a'));
   log.record(entry('b'));
   const n = read(dir, 'audit.log').length;
   edit(dir, 'audit.log', (lines) => { lines[n - 1] = lines[n - 1].replace('"b"', '"c"'); });
-  assertProblem(verify(dir), 'altered', 'audit.log', n, 27);
+  assertProblem(verify(dir), 'altered', 'audit.log', n, 28);
+
+  // A torn line ended with a newline by an older BFF is a complete line now: left alone, still reported as torn.
+  ({ dir } = writeLog());
+  fs.appendFileSync(path.join(dir, 'audit.log'), '{"seq":26,"ti\n');
+  log = new AuditLog({ dir, maxBytes: 100000, keep: 3 });
+  log.record(entry('after'));
+  const v = verify(dir);
+  at = { name: 'audit.log', line: read(dir, 'audit.log').length - 1 };
+  assertProblem(v, 'torn', 'audit.log', at.line, null, /torn: not a complete entry \(an interrupted write; the chain runs on around it\)/);
+  assert.equal(v.lastSeq, 26);
+});
+
+test('a head left behind by a crash between an entry and its head is moved on at start, recorded in the chain', () => {
+  const { dir, log } = writeLog();
+  const headFile = path.join(dir, 'audit.head');
+  const head = fs.readFileSync(headFile);
+  log.record(entry('x'));
+  log.record(entry('y'));
+  fs.writeFileSync(headFile, head); // as if the head updates of 26 and 27 never reached the disk
+  assertProblem(verify(dir), 'inserted', 'audit.log', read(dir, 'audit.log').length - 1, 26, /after the head \(seq 25\)/);
+
+  const again = new AuditLog({ dir, maxBytes: 100000, keep: 3 });
+  assert.equal(again.seq, 28);
+  const repair = JSON.parse(read(dir, 'audit.log').at(-1));
+  assert.equal(repair.op, 'audit.head_behind');
+  assert.match(repair.detail, /^the head said seq 25, the log ran on to seq 27/);
+  const v = verify(dir);
+  assert.equal(v.ok, true, v.summary);
+  assert.deepEqual(v.repairs.map((r) => [r.kind, r.seq]), [['head_behind', 28]]);
+  assert.match(v.summary, /; 1 head left behind repaired at start \(seq 28 in audit\.log line \d+: the head said seq 25/);
+
+  // Entries past the head that do not chain on from it are not taken over: verify still reports them.
+  const other = writeLog().dir;
+  edit(other, 'audit.log', (lines) => {
+    const last = JSON.parse(lines.at(-1));
+    const forged = { seq: 26, time: last.time, user: 'x', role: 'x', ip: null, op: 'x', outcome: 'ok', prev: 'f'.repeat(64) };
+    lines.push(JSON.stringify({ ...forged, hash: entryHash(forged) }));
+  });
+  new AuditLog({ dir: other, maxBytes: 100000, keep: 3 });
+  assert.equal(read(other, 'audit.log').some((l) => JSON.parse(l).op === 'audit.head_behind'), false);
+  assert.equal(verify(other).ok, false);
 });
 
 test('re-opening resumes the chain: from the current file, from the newest rotated file, and from the head after a removed tail', () => {
@@ -341,4 +432,16 @@ test('audit CLI: exit 0 with a one-line summary, 1 with the first problem, 2 on 
   r = cli(['help']);
   assert.equal(r.status, 0);
   assert.match(r.stdout, /npm run audit -- verify \[--data-dir DIR\]/);
+});
+
+test('audit CLI: a repaired torn write passes (exit 0) and is reported', () => {
+  const { dir } = writeLog();
+  fs.appendFileSync(path.join(dir, 'audit.log'), '{"seq":26,"time":"2026');
+  let r = cli(['verify', '--data-dir', dir]);
+  assert.equal(r.status, 1, 'before the BFF starts, the torn line is reported');
+  assert.match(r.stdout, /torn: incomplete last line/);
+  new AuditLog({ dir, maxBytes: 100000, keep: 3 });
+  r = cli(['verify', '--data-dir', dir]);
+  assert.equal(r.status, 0, r.stdout + r.stderr);
+  assert.match(r.stdout, /^audit log intact: .*; 1 torn write repaired at start \(seq 26 in audit\.log line \d+: cut 22 bytes/);
 });

@@ -14,6 +14,9 @@ export const HEAD_FILE = 'audit.head';
 /** The head file's fixed size: its JSON padded with spaces, and a newline (see audit-log.js). */
 export const HEAD_BYTES = 128;
 export const LOG_FILE = 'audit.log';
+/** Ops of the entries the BFF writes at start when it repaired the log after a crash or power loss (audit-log.js). */
+export const TORN_WRITE_OP = 'audit.torn_write';
+export const HEAD_BEHIND_OP = 'audit.head_behind';
 
 /**
  * @typedef {{seq: number, prev: string, hash: string, [k: string]: unknown}} ChainedEntry

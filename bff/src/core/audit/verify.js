@@ -10,11 +10,15 @@
 //             the head;
 // - torn:     a line that is not a complete entry while the chain runs on around it (a crash mid-write);
 // - head:     the head file is missing or damaged while the log has chained entries.
+// Repairs the BFF made at start after a crash or power loss (audit-log.js: a torn last line cut off, a head moved on)
+// are chained entries themselves; a log that is otherwise intact passes, and the summary lists them.
 // The oldest retained chained entry is the anchor: its `prev` is taken on trust, since rotation drops the oldest
 // file. Entries from before the chain (no seq/prev/hash) at the start are a legacy prefix, reported, not an error.
 import fs from 'node:fs';
 import path from 'node:path';
-import { GENESIS, HEAD_FILE, LOG_FILE, entryHash, isChained, isLegacy, parseHead } from './chain.js';
+import {
+  GENESIS, HEAD_BEHIND_OP, HEAD_FILE, LOG_FILE, TORN_WRITE_OP, entryHash, isChained, isLegacy, parseHead,
+} from './chain.js';
 
 /**
  * @typedef {{name: string, text: string}} AuditFile  one log file, by its name in the data dir
@@ -23,7 +27,9 @@ import { GENESIS, HEAD_FILE, LOG_FILE, entryHash, isChained, isLegacy, parseHead
  *   text: string}} AuditProblem  text: the line to print ("audit.log.1 line 17 (seq 233): altered: ...")
  * @typedef {{ok: boolean, entries: number, legacy: number, firstSeq: number|null, lastSeq: number|null,
  *   files: string[], anchor: {file: string, line: number, seq: number, genesis: boolean}|null,
- *   problem: AuditProblem|null, torn: AuditProblem[], summary: string}} AuditVerdict
+ *   problem: AuditProblem|null, torn: AuditProblem[], repairs: AuditRepair[], summary: string}} AuditVerdict
+ * @typedef {{kind: 'torn_write'|'head_behind', file: string, line: number, seq: number, detail: string}} AuditRepair
+ *   an entry the BFF wrote at start to record a repair (in the verified part of the chain)
  * @typedef {{file: string, line: number, raw: string, terminated: boolean,
  *   type: 'chained'|'legacy'|'bad', entry: any, hashOk: boolean}} Item
  */
@@ -113,13 +119,18 @@ export function verifyAuditLog({ files, head }) {
 
   const anchor = chain[0] ? { file: chain[0].file, line: chain[0].line, seq: chain[0].entry.seq, genesis: chain[0].entry.prev === GENESIS } : null;
   const tornNote = torn.length ? `; ${torn.length} torn ${torn.length === 1 ? 'line' : 'lines'}` : '';
+  /** @type {AuditRepair[]} */
+  const repairs = chain.filter((x) => x.entry.op === TORN_WRITE_OP || x.entry.op === HEAD_BEHIND_OP).map((x) => ({
+    kind: x.entry.op === TORN_WRITE_OP ? 'torn_write' : 'head_behind', file: x.file, line: x.line, seq: x.entry.seq, detail: String(x.entry.detail ?? ''),
+  }));
   let extent;
   if (!anchor) extent = `${legacy} legacy unchained ${legacy === 1 ? 'entry' : 'entries'}, no chained entries`;
   else {
     extent = `${chain.length} ${chain.length === 1 ? 'entry' : 'entries'}, seq ${anchor.seq}..${end.entry.seq}, files ${names.join(', ')}; `
       + `chain starts at seq ${anchor.seq} in ${anchor.file}${anchor.line > 1 ? ` line ${anchor.line}` : ''}`
       + (anchor.genesis ? ' (its beginning)' : ' (older entries rotated away; its prev hash is taken as the anchor)')
-      + (legacy ? `; ${legacy} legacy unchained ${legacy === 1 ? 'entry' : 'entries'} before it` : '');
+      + (legacy ? `; ${legacy} legacy unchained ${legacy === 1 ? 'entry' : 'entries'} before it` : '')
+      + repairNote(repairs, 'torn_write', 'torn write', 'torn writes') + repairNote(repairs, 'head_behind', 'head left behind', 'heads left behind');
   }
   if (!files.length && !head) extent = '0 entries (no audit log)';
   const ok = !problem && !torn.length;
@@ -128,7 +139,7 @@ export function verifyAuditLog({ files, head }) {
       : `audit log damaged: ${torn[0].text}; otherwise intact: ${extent}${tornNote}`;
   return {
     ok, entries: chain.length, legacy, firstSeq: anchor?.seq ?? null, lastSeq: end?.entry.seq ?? null, files: names, anchor,
-    problem: problem || torn[0] || null, torn, summary,
+    problem: problem || torn[0] || null, torn, repairs, summary,
   };
 }
 
@@ -152,6 +163,17 @@ function checkHead(headText, chain) {
     return at('inserted', chain[k + 1], `after the head (seq ${head.seq}): forged at the end, or the BFF stopped between writing this entry and the head`);
   }
   return null;
+}
+
+/**
+ * "; 2 torn writes repaired at start (seq 57 in audit.log.1 line 3: cut ...; seq 90 ...)", the first few listed.
+ * @param {AuditRepair[]} repairs @param {AuditRepair['kind']} kind @param {string} one @param {string} many
+ */
+function repairNote(repairs, kind, one, many) {
+  const r = repairs.filter((x) => x.kind === kind);
+  if (!r.length) return '';
+  const shown = r.slice(0, 5).map((x) => `seq ${x.seq} in ${x.file} line ${x.line}: ${x.detail}`);
+  return `; ${r.length} ${r.length === 1 ? one : many} repaired at start (${shown.join('; ')}${r.length > shown.length ? '; ...' : ''})`;
 }
 
 /** @param {Item} it */

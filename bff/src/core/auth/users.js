@@ -1,7 +1,9 @@
 // The users file: {version: 1, users: [{username, role, hash}]}. Hashes only; re-read when it changes on disk,
-// so users added with the CLI while the BFF runs can log in without a restart.
+// so users added with the CLI while the BFF runs can log in without a restart. Every change is written with
+// writeFileAtomic: once add/passwd/remove has returned, the change survives a crash or a power loss.
 import fs from 'node:fs';
-import { writeFileAtomic } from './atomic-file.js';
+import path from 'node:path';
+import { removeStaleTemps, writeFileAtomic } from './atomic-file.js';
 import { hashPassword, verifyPassword, DUMMY_HASH, randomPassword } from './passwords.js';
 
 /** @typedef {{username: string, role: string, hash: string}} UserRecord */
@@ -17,6 +19,8 @@ export class UserStore {
     /** @type {UserRecord[]} */
     this.users = [];
     this.mtimeMs = -1;
+    // Temp files of writes a crash interrupted (never read; only their disk space).
+    removeStaleTemps(path.dirname(file), path.basename(file));
   }
 
   exists() {
@@ -112,8 +116,15 @@ function checkPassword(password) {
 export async function ensureInitialUsers(store, dataDir, roles) {
   if (store.exists()) return null;
   const created = roles.map((role) => ({ username: role, role, password: randomPassword() }));
-  for (const u of created) await store.add(u.username, u.role, u.password);
+  for (const u of created) {
+    if (!USERNAME_RE.test(u.username)) throw new UsersError(`invalid user name "${u.username}" (a-z, 0-9, _ . -, 2-32 chars, starting with a letter)`);
+  }
+  const users = await Promise.all(created.map(async (u) => ({ username: u.username, role: u.role, hash: await hashPassword(u.password) })));
+  // The passwords before the users, each file in one write: a crash in between leaves no users file, so the next
+  // start begins again; the other order (or one user at a time) would leave users whose passwords nobody has.
   const file = `${dataDir}/initial-passwords.txt`;
   writeFileAtomic(file, created.map((u) => `${u.username} (${u.role}): ${u.password}`).join('\n') + '\n', 0o600);
+  store.users = users;
+  store.save();
   return { file, users: created };
 }

@@ -10,10 +10,14 @@
 //      folder when it holds only directories, and then each non-empty one of them is a drive; else D is a
 //      drive when it is not empty.
 // Hidden entries (".name") and symbolic links directly under a root or user folder are ignored.
-import crypto from 'node:crypto';
+//
+// Power loss: a replace or restore is answered only once the new file, its backup and both directory entries are
+// fsync'ed; each goes through a hidden temp file renamed into place, so a file or backup is never seen torn. Temp
+// files a crash left behind are removed at the next start.
 import fs from 'node:fs';
 import fsp from 'node:fs/promises';
 import path from 'node:path';
+import { removeStaleTemps, tempName } from '../../core/auth/atomic-file.js';
 import { checkContent, ContentError } from './content-check.js';
 
 export const DEFAULT_USB_ROOTS = ['/media', '/run/media'];
@@ -120,6 +124,7 @@ export class DatabaseFiles {
     this.now = now;
     /** @type {Map<string, Promise<unknown>>} one replace/restore at a time per target */
     this.locks = new Map();
+    for (const t of this.targets) for (const d of [this.dir, this.backupDir]) removeStaleTemps(d, t);
   }
 
   /** @returns {Promise<TargetInfo[]>} */
@@ -322,9 +327,9 @@ export class DatabaseFiles {
   async #installNow(target, open, check) {
     const f = this.fs;
     const dest = path.join(this.dir, target);
-    await f.mkdir(this.dir, { recursive: true });
+    await mkdirDurable(f, this.dir);
     const old = await statOrNull(dest);
-    const tmp = path.join(this.dir, `.${target}.${process.pid}.${crypto.randomBytes(6).toString('hex')}.tmp`);
+    const tmp = tempName(dest);
     let backup = null;
     let done = false;
     try {
@@ -363,23 +368,34 @@ export class DatabaseFiles {
     return { file: { name: target, size: st.size, mtime: st.mtime.toISOString(), exists: true }, backup };
   }
 
-  /** Copy the current file to .backups/<name>.<ISO time>; returns the backup's name. */
+  /**
+   * Copy the current file to .backups/<name>.<ISO time> through a temp file (fsync, rename, directory fsync), so
+   * a backup is complete or absent, never torn; returns the backup's name.
+   */
   async #backup(dest, target) {
     const f = this.fs;
-    await f.mkdir(this.backupDir, { recursive: true, mode: 0o700 });
-    const stamp = this.now().toISOString();
-    for (let i = 0; ; i++) {
-      const name = `${target}.${stamp}${i ? `-${i}` : ''}`;
-      try {
-        await f.copyFile(dest, path.join(this.backupDir, name), fs.constants.COPYFILE_EXCL);
-      } catch (e) {
-        if (e.code === 'EEXIST' && i < 100) continue;
-        throw e;
-      }
-      const fh = await f.open(path.join(this.backupDir, name), 'r');
+    await mkdirDurable(f, this.backupDir, 0o700);
+    const tmp = tempName(path.join(this.backupDir, target));
+    let renamed = false;
+    try {
+      await f.copyFile(dest, tmp, fs.constants.COPYFILE_EXCL);
+      const fh = await f.open(tmp, 'r');
       try { await fh.sync(); } finally { await fh.close(); }
-      await fsyncDir(this.backupDir);
-      return name;
+      const stamp = this.now().toISOString();
+      // Replacements of one target run one at a time (#install), so nothing takes the name between check and rename.
+      for (let i = 0; ; i++) {
+        const name = `${target}.${stamp}${i ? `-${i}` : ''}`;
+        if (await fsp.lstat(path.join(this.backupDir, name)).then(() => true, () => false)) {
+          if (i < 100) continue;
+          throw Object.assign(new Error(`backup ${name} exists`), { code: 'EEXIST' });
+        }
+        await f.rename(tmp, path.join(this.backupDir, name));
+        renamed = true;
+        await fsyncDir(this.backupDir);
+        return name;
+      }
+    } finally {
+      if (!renamed) await f.rm(tmp, { force: true }).catch(() => {});
     }
   }
 
@@ -411,6 +427,19 @@ async function subdirs(dir) {
     if (st) out.push({ name: e.name, st });
   }
   return out;
+}
+
+/**
+ * mkdir -p whose new directories survive a power loss: the parent of each one created is fsync'ed.
+ * @param {typeof import('node:fs/promises')} f @param {string} dir @param {number} [mode]
+ */
+async function mkdirDurable(f, dir, mode) {
+  const first = await f.mkdir(dir, { recursive: true, ...(mode === undefined ? {} : { mode }) });
+  if (!first) return;
+  for (let d = path.resolve(dir); ; d = path.dirname(d)) {
+    await fsyncDir(path.dirname(d));
+    if (d === path.resolve(first)) break;
+  }
 }
 
 async function fsyncDir(dir) {
