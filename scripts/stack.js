@@ -5,7 +5,7 @@
 // A watchdog (scripts/watchdog.js, detached) stops them too if this supervisor dies, even by SIGKILL.
 //
 // Supervision: a child that dies without being asked to is restarted with the same command after a back-off
-// (scripts/supervise/restart-policy.js: 0.5 s doubling to 10 s), once whatever is left of it is gone: its
+// (scripts/supervise/restart-policy.js: at once, then 0.5 s doubling to 10 s), once whatever is left of it is gone: its
 // process group and every process carrying its own marker (CELL_STACK_CHILD=<name>: roslaunch's nodes
 // outlive a SIGKILLed roslaunch, and an old rosbridge would hold the port). When roscore dies, the ROS side
 // and the simulated cell are stopped too and started again once the new master answers (rospy nodes never
@@ -26,7 +26,7 @@ import { FEATURES } from '../bff/src/features/index.js';
 import { launchFiles } from './feature-launch.js';
 import { masterOnline } from '../bff/src/core/ros/health.js';
 import { resolveHosts, armsOf } from '../bff/src/core/config/hosts.js';
-import { RestartPolicy, seconds } from './supervise/restart-policy.js';
+import { RestartPolicy, restartDelay, seconds } from './supervise/restart-policy.js';
 import { Liveness, graceFromEnv } from './supervise/liveness.js';
 
 const env = readEnv();
@@ -179,7 +179,7 @@ function onExit(c, proc, code, sig) {
   }
   const core = c.name === 'roscore';
   const deps = core ? [...children.values()].filter((x) => MASTER_DEPENDENTS.includes(x.name)) : [];
-  log(`${c.name} exited (${why}); restarting in ${seconds(d.delayMs)} (crash ${d.crashes} of ${d.maxCrashes} in ${span})`
+  log(`${c.name} exited (${why}); restarting ${restartDelay(d.delayMs)} (crash ${d.crashes} of ${d.maxCrashes} in ${span})`
     + (deps.length ? `; then ${deps.map((x) => x.name).join(' and ')}, which must register with the new master` : ''));
   restart(c, proc.pid, d.delayMs, deps).catch((e) => {
     if (!stopping) { log(`restarting ${c.name} failed: ${e.stack || e}`); shutdown(1); }

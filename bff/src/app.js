@@ -10,6 +10,7 @@ import { LoginThrottle } from './core/auth/throttle.js';
 import { authRoutes } from './core/auth/routes.js';
 import { AuditLog } from './core/audit/audit-log.js';
 import { ControlLease } from './core/control/lease.js';
+import { LeaseFile } from './core/control/lease-file.js';
 import { controlRoutes } from './core/control/routes.js';
 import { configFor } from './core/access/pages.js';
 import { grantsFor, motionNames, argumentChecks } from './core/access/grants.js';
@@ -28,10 +29,12 @@ export class StartupError extends Error {}
 
 /**
  * @param {import('./core/config/env.js').Env} env
- * @param {{log?: (m: string) => void, throttle?: LoginThrottle, features?: import('./core/features/feature.js').Feature[]}} [opts]
- *   features: the feature list (tests add fixture features)
+ * @param {{log?: (m: string) => void, throttle?: LoginThrottle, features?: import('./core/features/feature.js').Feature[],
+ *   startedAt?: number}} [opts]
+ *   features: the feature list (tests add fixture features); startedAt: when this BFF started (ms since the epoch;
+ *   the process's start by default), for a control lease carried over a restart
  */
-export async function createBff(env, { log = (m) => console.log(m), throttle = new LoginThrottle(), features = FEATURES } = {}) {
+export async function createBff(env, { log = (m) => console.log(m), throttle = new LoginThrottle(), features = FEATURES, startedAt = performance.timeOrigin } = {}) {
   const cell = loadCell(env.cellConfig, features);
   fs.mkdirSync(env.dataDir, { recursive: true, mode: 0o700 });
   const users = new UserStore(env.usersFile);
@@ -44,13 +47,17 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     key: loadOrCreateKey(env.dataDir), ttlS: env.tokenTtlS, revoked: new RevocationList(path.join(env.dataDir, 'revoked.json')),
   });
   const audit = new AuditLog({ dir: env.dataDir });
+  for (const r of audit.repairs) log(`audit log repaired at start: ${r.op} ${r.target}${r.detail ? ` (${r.detail})` : ''}`);
+  const leaseFile = new LeaseFile(path.join(env.dataDir, 'control-lease.json'), log);
   const lease = new ControlLease({
     timeoutMs: (cell.control?.heartbeat_timeout_s ?? 2) * 1000,
     onChange: (event, h, by) => audit.record({
       user: (by || h)?.username ?? null, role: (by || h)?.role ?? null, ip: null, op: `control.${event}`,
       target: h?.username, outcome: 'ok',
     }),
+    persist: (saved) => leaseFile.write(saved),
   });
+  lease.resume(leaseFile.read(), startedAt);
   const rosHealth = new RosHealth({ masterUri: env.rosMasterUri, rosbridgePort: env.rosbridgePort });
   const started = Date.now();
   const healthReport = async () => ({ status: 'ok', version: VERSION, uptime_s: (Date.now() - started) / 1000, ros: await rosHealth.get() });

@@ -24,7 +24,7 @@ export async function startBff(extraEnv = {}, opts = {}) {
   server.on('upgrade', (req, socket, head) => bff.relay.handleUpgrade(req, socket, head));
   await new Promise((r) => server.listen(0, '127.0.0.1', r));
   const base = `http://127.0.0.1:${server.address().port}`;
-  const passwords = Object.fromEntries(bff.initial.users.map((u) => [u.username, u.password]));
+  const passwords = Object.fromEntries((bff.initial?.users ?? []).map((u) => [u.username, u.password]));
   return {
     env, bff, base, passwords, dataDir,
     async stop() {

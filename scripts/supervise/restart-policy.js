@@ -1,8 +1,10 @@
 // When to restart a child of the stack (scripts/stack.js) that died, and when to stop trying. Pure: the clock
 // is injected, nothing here spawns or waits.
 //
-// - Back-off: the first restart waits `minDelayMs`, each further one twice as long, up to `maxDelayMs`.
-// - A child that ran for `stableMs` before it died starts over from `minDelayMs`.
+// - Back-off: the first restart is immediate (a child that ran and died once is most likely a one-off, and every
+//   second it is away counts: the BFF must be back within the control lease's heartbeat timeout for the holder to
+//   keep control), the second waits `minDelayMs`, each further one twice as long, up to `maxDelayMs`.
+// - A child that ran for `stableMs` before it died starts over with an immediate restart.
 // - A crash loop: `maxCrashes` crashes within `windowMs` (the last one included). Then restarting is pointless
 //   (a port taken, a broken install...): the supervisor gives up and exits non-zero, so whatever supervises
 //   it (systemd's Restart=on-failure) takes over with its own, slower, back-off.
@@ -70,7 +72,7 @@ export class RestartPolicy {
     const crashes = this.crashTimes.length;
     const base = { crashes, maxCrashes: this.maxCrashes, windowMs: this.windowMs };
     if (crashes >= this.maxCrashes) return { giveUp: true, delayMs: 0, ...base };
-    const delayMs = Math.min(this.maxDelayMs, this.minDelayMs * 2 ** this.attempt);
+    const delayMs = this.attempt === 0 ? 0 : Math.min(this.maxDelayMs, this.minDelayMs * 2 ** (this.attempt - 1));
     this.attempt++;
     return { giveUp: false, delayMs, ...base };
   }
@@ -78,3 +80,6 @@ export class RestartPolicy {
 
 /** "0.5 s", "10 s": a delay as the log shows it. @param {number} ms */
 export const seconds = (ms) => `${Math.round(ms / 100) / 10} s`;
+
+/** "at once", "in 0.5 s": a restart delay as the log shows it. @param {number} ms */
+export const restartDelay = (ms) => (ms === 0 ? 'at once' : `in ${seconds(ms)}`);

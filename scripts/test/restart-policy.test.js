@@ -1,7 +1,7 @@
 // The supervisor's restart policy (scripts/supervise/restart-policy.js), on a fake clock.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { RestartPolicy, DEFAULTS, seconds } from '../supervise/restart-policy.js';
+import { RestartPolicy, DEFAULTS, restartDelay, seconds } from '../supervise/restart-policy.js';
 
 function clock(t = 1_000_000) {
   const c = { t, now: () => c.t, advance: (ms) => { c.t += ms; } };
@@ -15,7 +15,7 @@ function runAndCrash(p, c, ranMs) {
   return p.crashed();
 }
 
-test('defaults: 0.5 s doubling to 10 s, reset after 30 s stable, 5 crashes in 60 s', () => {
+test('defaults: at once, then 0.5 s doubling to 10 s, reset after 30 s stable, 5 crashes in 60 s', () => {
   assert.deepEqual({ ...DEFAULTS }, { minDelayMs: 500, maxDelayMs: 10_000, stableMs: 30_000, maxCrashes: 5, windowMs: 60_000 });
 });
 
@@ -30,20 +30,19 @@ test('the back-off doubles from the minimum up to the cap', () => {
     delays.push(d.delayMs);
     c.advance(d.delayMs);
   }
-  assert.deepEqual(delays, [500, 1000, 2000, 4000, 8000, 10_000, 10_000, 10_000]);
+  assert.deepEqual(delays, [0, 500, 1000, 2000, 4000, 8000, 10_000, 10_000]);
 });
 
-test('a child that ran stably starts over from the minimum delay', () => {
+test('a child that ran stably starts over with an immediate restart', () => {
   const c = clock();
   const p = new RestartPolicy({ now: c.now });
+  assert.equal(runAndCrash(p, c, 1000).delayMs, 0);
   assert.equal(runAndCrash(p, c, 1000).delayMs, 500);
   c.advance(500);
-  assert.equal(runAndCrash(p, c, 1000).delayMs, 1000);
+  assert.equal(runAndCrash(p, c, 29_999).delayMs, 1000, 'not quite stable');
   c.advance(1000);
-  assert.equal(runAndCrash(p, c, 29_999).delayMs, 2000, 'not quite stable');
-  c.advance(2000);
   const d = runAndCrash(p, c, 30_000);
-  assert.equal(d.delayMs, 500, 'stable for 30 s');
+  assert.equal(d.delayMs, 0, 'stable for 30 s');
   assert.equal(d.giveUp, false);
 });
 
@@ -86,18 +85,21 @@ test('a crash before any start (e.g. during the first start-up) still counts', (
   const c = clock();
   const p = new RestartPolicy({ now: c.now });
   const d = p.crashed();
-  assert.deepEqual(d, { giveUp: false, delayMs: 500, crashes: 1, maxCrashes: 5, windowMs: 60_000 });
+  assert.deepEqual(d, { giveUp: false, delayMs: 0, crashes: 1, maxCrashes: 5, windowMs: 60_000 });
 });
 
 test('options override the defaults, undefined ones do not', () => {
-  const p = new RestartPolicy({ minDelayMs: 100, maxDelayMs: undefined, maxCrashes: 2 });
+  const p = new RestartPolicy({ minDelayMs: 100, maxDelayMs: undefined, maxCrashes: 3 });
   assert.equal(p.minDelayMs, 100);
   assert.equal(p.maxDelayMs, 10_000);
+  assert.equal(p.crashed().delayMs, 0);
   assert.equal(p.crashed().delayMs, 100);
   assert.equal(p.crashed().giveUp, true);
 });
 
-test('seconds() formats delays for the log', () => {
+test('seconds() and restartDelay() format delays for the log', () => {
+  assert.equal(restartDelay(0), 'at once');
+  assert.equal(restartDelay(500), 'in 0.5 s');
   assert.equal(seconds(500), '0.5 s');
   assert.equal(seconds(10_000), '10 s');
   assert.equal(seconds(1250), '1.3 s');

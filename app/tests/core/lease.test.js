@@ -135,6 +135,71 @@ describe('ControlLease', () => {
     expect(lease.lost?.reason).toMatch(/^the lease expired/);
   });
 
+  it('a server back from a restart in time gives control back: a kept notice, once, heartbeats go on', async () => {
+    const { lease, answers, step, calls } = setup();
+    await lease.take();
+    answers.controlHeartbeat = offline;
+    await step();
+    await step();
+    expect(lease.you).toBe(true);
+    expect(lease.kept).toBeNull();
+    answers.controlHeartbeat = ok({ holder: { ...ann, resumed_at: '2024-01-01T10:09:00.000Z' }, you: true });
+    await step();
+    expect(lease.you).toBe(true);
+    expect(lease.kept?.reason).toMatch(/^the server restarted and gave control back to you/);
+    lease.dismissKept();
+    await step();
+    expect(lease.kept).toBeNull(); // the same restart is told once
+    expect(calls.filter((c) => c === 'controlHeartbeat')).toHaveLength(4);
+  });
+
+  it('a server that restarts slower than the timeout: control reads lost, then kept when it answers that it gave it back', async () => {
+    const { lease, answers, step } = setup();
+    await lease.take();
+    answers.controlHeartbeat = offline;
+    for (let i = 0; i < 5; i++) await step(); // 2.5 s
+    expect(lease.you).toBe(false);
+    expect(lease.lost?.reason).toBe('the server could not be reached');
+    await step(); // still asking
+    answers.controlHeartbeat = ok({ holder: { ...ann, resumed_at: '2024-01-01T10:09:00.000Z' }, you: true });
+    await step();
+    expect(lease.you).toBe(true);
+    expect(lease.lost).toBeNull();
+    expect(lease.kept?.reason).toMatch(/^the server restarted and gave control back to you/);
+  });
+
+  it('after losing control to an unreachable server: a 409 gives the server\'s reason; silence ends the asking', async () => {
+    const { lease, answers, step, timers, calls } = setup();
+    await lease.take();
+    answers.controlHeartbeat = offline;
+    for (let i = 0; i < 5; i++) await step();
+    const ended = 'control lapsed while the server restarted (it was back 3.4 s after the last heartbeat; the limit is 2 s)';
+    answers.controlHeartbeat = { kind: 'error', status: 409, error: 'you do not hold control', data: { error: 'you do not hold control', holder: null, ended } };
+    await step();
+    expect(lease.you).toBe(false);
+    expect(lease.lost?.reason).toBe(ended);
+    expect(timers.pending).toHaveLength(0); // not watched, not reclaiming: no more requests
+
+    await lease.take();
+    answers.controlHeartbeat = offline;
+    for (let i = 0; i < 5; i++) await step();
+    const before = calls.length;
+    for (let i = 0; i < 80 && timers.pending.length; i++) await step(); // 30 s of asking, then it stops
+    expect(timers.pending).toHaveLength(0);
+    expect(calls.length - before).toBe(61); // every 0.5 s from 0 to 30 s
+    expect(lease.lost?.reason).toBe('the server could not be reached');
+  });
+
+  it('a heartbeat answered 409 with the server\'s reason (control lapsed during a restart) shows that reason', async () => {
+    const { lease, answers, step } = setup();
+    await lease.take();
+    const ended = 'control lapsed while the server restarted (it was back 5.2 s after the last heartbeat; the limit is 2 s)';
+    answers.controlHeartbeat = { kind: 'error', status: 409, error: 'you do not hold control', data: { error: 'you do not hold control', holder: null, ended } };
+    await step();
+    expect(lease.you).toBe(false);
+    expect(lease.lost?.reason).toBe(ended);
+  });
+
   it('offline heartbeats lose control once the server timeout has passed', async () => {
     const { lease, answers, step } = setup();
     await lease.take();

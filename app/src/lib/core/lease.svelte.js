@@ -6,7 +6,10 @@
  * The server drops a lease after 2 s without a heartbeat, so while we hold it we heartbeat every
  * 500 ms; otherwise, while someone shows the lease (watch()), we poll every 1.5 s.
  * Losing the lease (taken over, expired, server unreachable) leaves a notice in `lost` until dismissed
- * or control is taken again.
+ * or control is taken again. A BFF that restarts within the timeout gives the lease back to its holder
+ * (holder.resumed_at): that leaves a notice in `kept`; one that was back too late answers the heartbeat
+ * with 409 and `ended` saying so. So after losing control to an unreachable server we go on heartbeating
+ * (for `reclaimMs`) to hear which it was.
  */
 import { api as defaultApi } from './api.js';
 import { session } from './session.svelte.js';
@@ -36,14 +39,21 @@ export class ControlLease {
   reachable = $state(false);
   /** Why we lost control, until dismissed. @type {LostNotice | null} */
   lost = $state(null);
+  /** We kept control through something worth telling (a server restart), until dismissed. @type {LostNotice | null} */
+  kept = $state(null);
 
   #watchers = 0;
   /** @type {any} */
   #timer = null;
   #inflight = false;
   #lastOk = 0;
+  // The resumed_at we have already told about (or that predates our taking control).
+  /** @type {string | undefined} */
+  #resumedSeen = undefined;
   // Bumped by take/release/reset so an answer to an older request does not undo a newer one.
   #epoch = 0;
+  // Until when we go on heartbeating after losing control to an unreachable server (0: not reclaiming).
+  #reclaimUntil = 0;
 
   /**
    * @param {object} [o]
@@ -51,6 +61,7 @@ export class ControlLease {
    * @param {number} [o.heartbeatMs]
    * @param {number} [o.pollMs]
    * @param {number} [o.timeoutMs]  the server's lease timeout
+   * @param {number} [o.reclaimMs]  how long to keep asking an unreachable server whether it kept our control
    * @param {() => number} [o.now]
    * @param {(fn: () => void, ms: number) => any} [o.setTimer]
    * @param {(t: any) => void} [o.clearTimer]
@@ -61,6 +72,7 @@ export class ControlLease {
     this.heartbeatMs = o.heartbeatMs ?? 500;
     this.pollMs = o.pollMs ?? 1500;
     this.timeoutMs = o.timeoutMs ?? 2000;
+    this.reclaimMs = o.reclaimMs ?? 30_000;
     this.now = o.now ?? Date.now;
     this.setTimer = o.setTimer ?? ((fn, ms) => setTimeout(fn, ms));
     this.clearTimer = o.clearTimer ?? ((t) => clearTimeout(t));
@@ -95,12 +107,15 @@ export class ControlLease {
    */
   async take(o = {}) {
     const epoch = ++this.#epoch;
+    this.#reclaimUntil = 0;
     const r = await this.api.controlTake(o.force ? { force: true } : undefined);
     if (epoch !== this.#epoch) throw new Error('Superseded by a newer control request');
     if (r.kind === 'ok') {
       this.reachable = true;
       this.lost = null;
+      this.kept = null;
       this.#lastOk = this.now();
+      this.#resumedSeen = r.data?.holder?.resumed_at;
       this.#apply(r.data);
       this.#schedule();
       return r.data;
@@ -121,6 +136,7 @@ export class ControlLease {
   /** Give control back. Throws only when the server answers with an error other than "offline". */
   async release() {
     const epoch = ++this.#epoch;
+    this.#reclaimUntil = 0;
     const wasYou = this.#you;
     // Stop heartbeating at once: even if the release does not reach the server, the lease ends in 2 s.
     this.you = false;
@@ -152,9 +168,14 @@ export class ControlLease {
     this.lost = null;
   }
 
+  dismissKept() {
+    this.kept = null;
+  }
+
   /** Forget everything and stop all timers (logout). Does not call the server. */
   reset() {
     this.#epoch++;
+    this.#reclaimUntil = 0;
     if (this.#timer !== null) this.clearTimer(this.#timer);
     this.#timer = null;
     this.#watchers = 0;
@@ -162,6 +183,7 @@ export class ControlLease {
     this.you = false;
     this.reachable = false;
     this.lost = null;
+    this.kept = null;
   }
 
   /** @param {{ holder?: LeaseHolder | null, you?: boolean } | null} view */
@@ -175,6 +197,7 @@ export class ControlLease {
   /** @param {string} reason */
   #lose(reason) {
     this.you = false;
+    this.kept = null;
     this.lost = { reason, at: this.now() };
   }
 
@@ -192,33 +215,56 @@ export class ControlLease {
     }
   }
 
+  #reclaiming() {
+    return this.#reclaimUntil > 0 && this.now() <= this.#reclaimUntil;
+  }
+
   async #heartbeat() {
     const epoch = this.#epoch;
+    const reclaiming = !this.#you;
     const r = await this.api.controlHeartbeat();
-    if (epoch !== this.#epoch || !this.#you) return;
+    if (epoch !== this.#epoch || !(this.#you || this.#reclaiming())) return;
     if (r.kind === 'ok') {
       this.reachable = true;
       this.#lastOk = this.now();
+      this.#reclaimUntil = 0;
       this.#apply(r.data);
-      if (!this.#you) this.#lose('the server no longer counts this session as the holder');
+      if (!this.#you) {
+        if (!reclaiming) this.#lose('the server no longer counts this session as the holder');
+        return;
+      }
+      if (reclaiming) this.lost = null;
+      const resumed = r.data?.holder?.resumed_at;
+      if (resumed && resumed !== this.#resumedSeen) {
+        this.#resumedSeen = resumed;
+        this.kept = { reason: 'the server restarted and gave control back to you; motion stopped while it was away', at: this.now() };
+      }
       return;
     }
     if (r.kind === 'unauthorized') {
+      this.#reclaimUntil = 0;
       this.#lose('the session ended');
       this.onUnauthorized();
       return;
     }
     if (r.kind === 'offline') {
       this.reachable = false;
-      // The server drops a silent holder after its timeout: by now it has.
-      if (this.now() - this.#lastOk > this.timeoutMs) this.#lose('the server could not be reached');
+      // The server drops a silent holder after its timeout, unless it restarts in time and gives control back:
+      // lose it now, and keep asking for a while.
+      if (!reclaiming && this.now() - this.#lastOk > this.timeoutMs) {
+        this.#lose('the server could not be reached');
+        this.#reclaimUntil = this.now() + this.reclaimMs;
+      }
       return;
     }
     this.reachable = true;
+    this.#reclaimUntil = 0;
     if (r.status === 409) {
       const h = r.data?.holder ?? null;
       this.holder = h;
-      this.#lose(h ? `taken over by ${holderLabel(h)}` : 'the lease expired (no heartbeat reached the server in time)');
+      // ended: the server's own account, when it has one (e.g. control lapsed while it restarted)
+      const ended = typeof r.data?.ended === 'string' ? r.data.ended : null;
+      this.#lose(ended ?? (h ? `taken over by ${holderLabel(h)}` : 'the lease expired (no heartbeat reached the server in time)'));
     }
   }
 
@@ -228,7 +274,7 @@ export class ControlLease {
     if (this.#inflight) return;
     this.#inflight = true;
     try {
-      if (this.#you) await this.#heartbeat();
+      if (this.#you || this.#reclaiming()) await this.#heartbeat();
       else if (this.#watchers > 0) await this.refresh();
     } catch {
       /* the API client does not throw; keep the loop alive anyway */
@@ -242,7 +288,8 @@ export class ControlLease {
     if (this.#inflight) return; // #tick schedules when its request is answered
     if (this.#timer !== null) this.clearTimer(this.#timer);
     this.#timer = null;
-    const ms = this.#you ? this.heartbeatMs : this.#watchers > 0 ? this.pollMs : 0;
+    if (this.#reclaimUntil > 0 && !this.#reclaiming()) this.#reclaimUntil = 0;
+    const ms = this.#you || this.#reclaimUntil > 0 ? this.heartbeatMs : this.#watchers > 0 ? this.pollMs : 0;
     if (ms) this.#timer = this.setTimer(() => this.#tick(), ms);
   }
 }

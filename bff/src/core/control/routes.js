@@ -18,7 +18,11 @@ export function controlRoutes({ lease, cell, mayControl }) {
     res.json(view(req));
   });
   r.post('/api/control/heartbeat', requireSession, (req, res) => {
-    if (!lease.heartbeat(req.session)) return res.status(409).json({ error: 'you do not hold control', holder: lease.describe() });
+    if (!lease.heartbeat(req.session)) {
+      // ended: why this session lost control, when it was the last holder (e.g. it lapsed during a BFF restart)
+      const ended = lease.endedFor(req.session);
+      return res.status(409).json({ error: 'you do not hold control', holder: lease.describe(), ...(ended ? { ended } : {}) });
+    }
     res.json(view(req));
   });
   r.post('/api/control/release', requireSession, (req, res) => {

@@ -15,6 +15,8 @@ const health = {
   },
 };
 const lease = { type: 'object', required: ['holder', 'you'], properties: { holder: { type: ['object', 'null'] }, you: { type: 'boolean' } } };
+// holder.resumed_at: the BFF restarted and gave the lease back to its holder. ended: why this session lost control.
+const leaseRefused = { type: 'object', required: ['error'], properties: { error: { type: 'string' }, holder: { type: ['object', 'null'] }, ended: { type: 'string' } } };
 const unauthorized = { description: 'Not logged in', ...json(error) };
 
 /** The core's part of the document; buildOpenApi adds the features'. */
@@ -66,7 +68,7 @@ const core = {
       },
     },
     '/api/control/heartbeat': {
-      post: { summary: 'Keep control (send about every 500 ms; lost after the cell file\'s heartbeat timeout)', security: [{ session: [] }], responses: { 200: { description: 'Still yours', ...json(lease) }, 401: unauthorized, 409: { description: 'Not yours', ...json(error) } } },
+      post: { summary: 'Keep control (send about every 500 ms; lost after the cell file\'s heartbeat timeout)', security: [{ session: [] }], responses: { 200: { description: 'Still yours', ...json(lease) }, 401: unauthorized, 409: { description: 'Not yours (ended: why you lost it, when you were the last holder)', ...json(leaseRefused) } } },
     },
     '/api/control/release': {
       post: { summary: 'Give control back', security: [{ session: [] }], responses: { 204: { description: 'Released' }, 401: unauthorized } },
