@@ -5,6 +5,7 @@ import os
 import signal
 import socket
 import subprocess
+import sys
 import tempfile
 import time
 from typing import Iterator
@@ -49,3 +50,15 @@ def roscore() -> Iterator[str]:
             proc.wait(10)
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, signal.SIGKILL)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """A failing test's report shows the end of the log of each ROS node running then (the node tests'
+    nodes_helpers: the nodes of a module-scoped fixture outlive the test, their logs end up removed)."""
+    outcome = yield
+    report = outcome.get_result()
+    helpers = sys.modules.get("nodes_helpers")
+    if report.failed and helpers is not None:
+        for label, text in helpers.running_logs():
+            report.sections.append((f"log of the node {label} ({report.when})", text))

@@ -13,6 +13,16 @@ from typing import Callable, Iterator, Optional
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
+NO_MASTER = "http://127.0.0.1:1"   # a ROS master URI where none answers
+
+
+def sim_env(master: str = NO_MASTER, env: Optional[dict[str, str]] = None) -> dict[str, str]:
+    """The environment a test's sim runs in: this process's, with the ROS master `master` (none by default) and the
+    demo cell unless the test passes --cell or CELL_CONFIG in `env` (never the caller's CELL_CONFIG)."""
+    e = dict(os.environ, ROS_MASTER_URI=master)
+    e.pop("CELL_CONFIG", None)
+    e.update(env or {})
+    return e
 
 
 def port_open(host: str, port: int) -> bool:
@@ -66,11 +76,7 @@ def start_sim() -> Iterator[Callable[..., SimProcess]]:
     procs: list[SimProcess] = []
 
     def start(host: str, *args: str, env: Optional[dict[str, str]] = None) -> SimProcess:
-        e = dict(os.environ)
-        e["ROS_MASTER_URI"] = "http://127.0.0.1:1"  # no master unless a test passes one
-        e.pop("CELL_CONFIG", None)  # the demo cell unless a test passes --cell or CELL_CONFIG: not the caller's
-        e.update(env or {})
-        sim = SimProcess(host, list(args), e)
+        sim = SimProcess(host, list(args), sim_env(env=env))
         procs.append(sim)
         sim.wait_ready()
         return sim
@@ -87,10 +93,7 @@ def module_sim(request) -> Iterator[SimProcess]:
     """One sim per test module; the module sets SIM_HOST and SIM_ARGS."""
     host = getattr(request.module, "SIM_HOST")
     args = getattr(request.module, "SIM_ARGS", [])
-    env = dict(os.environ)
-    env["ROS_MASTER_URI"] = "http://127.0.0.1:1"
-    env.pop("CELL_CONFIG", None)
-    sim = SimProcess(host, list(args), env)
+    sim = SimProcess(host, list(args), sim_env())
     sim.wait_ready()
     yield sim
     took = sim.stop()

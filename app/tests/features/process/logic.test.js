@@ -1,6 +1,7 @@
 import { describe, it, expect } from 'vitest';
 import {
   processView, controls, needsStartConfirmation, cycleText, fieldAt, formatValue, parseCycles, formatSeconds, startQuestion,
+  cycleTimeText,
 } from '../../../src/lib/features/process/logic.js';
 
 const msg = (o = {}) => ({
@@ -88,3 +89,20 @@ describe('status fields', () => {
     expect(formatValue(undefined, 's')).toBe('–');
   });
 });
+
+describe('cycle times with and without pauses', () => {
+  it('reads both from the state message (0 when a node does not send them)', () => {
+    const v = processView(msg({ cycle_time_s: 12.3, cycle_elapsed_s: 14.1, last_cycle_s: 10.5, last_cycle_elapsed_s: 11 }));
+    expect([v.cycleTimeS, v.cycleElapsedS, v.lastCycleS, v.lastCycleElapsedS]).toEqual([12.3, 14.1, 10.5, 11]);
+    expect(processView(msg({ cycle_time_s: 3 })).cycleElapsedS).toBe(0);
+  });
+
+  it('shows the time with pauses beside the active time only when the two read differently', () => {
+    expect(cycleTimeText(12.34, 14.1)).toBe('12.3 s (14.1 s with pauses)');
+    expect(cycleTimeText(10.5, 10.52)).toBe('10.5 s');                 // the same to the tenth: one figure
+    expect(cycleTimeText(10.5, 0)).toBe('10.5 s');                     // no elapsed field
+    expect(cycleTimeText(0, 0)).toBe('–');
+    expect(cycleTimeText(59, 75)).toBe('59.0 s (1 min 15 s with pauses)');
+  });
+});
+

@@ -3,6 +3,7 @@ keeps active ones, first/last seen, the overall status, the operation-mode decis
 Messages are fed as plain dicts; timestamps are explicit seconds."""
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -386,7 +387,7 @@ def test_demo_cell_section() -> None:
 
 def test_defaults_and_errors_name_the_field() -> None:
     cfg = parse_alarms({"operation_mode": MODE})
-    assert cfg == AlarmsConfig(alarm_mode="alarm")
+    assert cfg == AlarmsConfig(alarm_mode="alarm", modes=tuple(MODE["modes"]))
     assert cfg.force_limit_n is None and cfg.wrench_topics == () and cfg.timeout_s == 2.0
     assert parse_alarms(cell(wrench_topics=["/a", "/b"])).wrench_topics == ("/a", "/b")
     for section, where in (({"force_limit_n": -1}, "alarms.force_limit_n"),
@@ -475,3 +476,126 @@ def test_severity_globs_reach_every_group() -> None:
     sev = {x.id: x.severity for x in a.alarms()}
     assert sev == {"robot.left.reduced_mode": INFO, "robot.right.reduced_mode": INFO,
                    "robot.left.power_off": WARNING, "robot.right.power_off": INFO}
+
+
+# ---------------------------------------------------------------------------------------------- across a restart
+def _restarted(memory: dict, now: float = 200.0, **alarms) -> Alarms:
+    """A new core (the node after its restart) given the memory the old one saved, through its JSON file."""
+    import json
+    b = make(now=now, **alarms)
+    assert b.restore(json.loads(json.dumps(memory))) is None
+    return b
+
+
+def _in_alarm_from_running() -> Alarms:
+    a = make()
+    a.on_mode("running", "ui:alice")
+    a.on_faults("/sim/faults", [fault("door_open", True)], 1.0)
+    req = a.mode_request(1.0)
+    assert req.mode == "alarm"
+    a.mode_done(req, True)
+    a.on_mode("alarm", "alarms")
+    return a
+
+
+def test_the_mode_an_alarm_replaced_survives_a_restart_of_the_node() -> None:
+    a = _in_alarm_from_running()
+    assert a.memory() == {"alarm_mode": "alarm", "previous": "running", "seen": ["device.door_open"],
+                          "want_alarm": False}
+    # Without the memory (what a restart did before): the mode stays alarm for good once the fault clears.
+    fresh = make(now=200.0)
+    fresh.on_mode("alarm", "alarms")
+    fresh.on_faults("/sim/faults", [fault("door_open", False)], 200.5)
+    assert fresh.mode_request(201.0) is None
+    # With it: the fault cleared while the node was down; once the sources reported, the mode goes back.
+    b = _restarted(a.memory())
+    b.on_mode("alarm", "alarms")                                   # the latched mode topic
+    assert b.mode_request(200.1) is None                            # nothing reported yet: nothing given back
+    b.on_faults("/sim/faults", [fault("door_open", False)], 200.2)
+    b.on_wrench(WRENCH, wrench(), 200.2)
+    assert b.mode_request(200.3) is None                            # the modules have not reported yet
+    b.on_modules([], 200.4)
+    assert b.mode_request(200.5) == ModeRequest("running", "no error alarm active any more")
+
+
+def test_after_a_restart_an_alarm_still_active_keeps_the_mode_and_clears_it_later() -> None:
+    b = _restarted(_in_alarm_from_running().memory(), timeout_s=2, startup_grace_s=5)
+    b.on_mode("alarm", "alarms")
+    b.on_faults("/sim/faults", [fault("door_open", True)], 200.5)
+    b.on_wrench(WRENCH, wrench(), 200.5)
+    b.on_modules([], 200.5)
+    assert b.settled(200.6) and b.mode_request(200.6) is None       # known again and still active: alarm stays
+    assert b.mode_request(206.0) is None
+    b.on_faults("/sim/faults", [fault("door_open", False)], 207.0)
+    assert b.mode_request(207.1) == ModeRequest("running", "no error alarm active any more")
+
+
+def test_after_a_restart_the_grace_ends_the_wait_for_silent_sources() -> None:
+    b = _restarted(_in_alarm_from_running().memory(), timeout_s=2, startup_grace_s=5)
+    b.on_mode("alarm", "alarms")
+    b.on_faults("/sim/faults", [], 201.0)                           # no wrench, no modules ever
+    assert b.mode_request(204.9) is None
+    assert b.mode_request(205.1) == ModeRequest("running", "no error alarm active any more")
+
+
+def test_after_a_restart_a_robot_counts_once_its_state_is_not_held_back() -> None:
+    c = cell(force_limit_n=80, timeout_s=2, startup_grace_s=10)
+    c["manual"] = {"groups": [{"name": "arm", "joints": ["elbow_joint"]}]}
+    a = Alarms(parse_alarms(c), 0.0)
+    a.on_mode("running", "ui")
+    a.on_robot_state("arm", robot(), 1.0)
+    a.on_robot_state("arm", robot(connected=False, safety="", mode=""), 2.0)   # connection lost: an error
+    req = a.mode_request(2.0)
+    a.mode_done(req, True)
+    a.on_mode("alarm", "alarms")
+    b = Alarms(parse_alarms(c), 100.0)
+    assert b.restore(a.memory()) is None
+    b.on_mode("alarm", "alarms")
+    b.on_faults("/sim/faults", [], 100.1)
+    b.on_wrench(WRENCH, wrench(), 100.1)
+    b.on_modules([], 100.1)
+    b.on_robot_state("arm", robot(connected=False, safety="", mode=""), 100.2)  # held back: first connection
+    assert b.mode_request(100.3) is None
+    b.on_robot_state("arm", robot(), 101.0)
+    assert b.mode_request(101.1) == ModeRequest("running", "no error alarm active any more")
+
+
+def test_after_a_restart_an_error_already_acted_on_does_not_switch_again_but_a_new_one_does_at_once() -> None:
+    a = _in_alarm_from_running()
+    a.on_mode("manual", "ui:bob")                                   # the operator recovers the cell
+    a.mode_request(2.0)
+    assert a.memory() == {"alarm_mode": "alarm", "previous": None, "seen": ["device.door_open"], "want_alarm": False}
+    b = _restarted(a.memory())
+    b.on_mode("manual", "ui:bob")
+    b.on_faults("/sim/faults", [fault("door_open", True)], 200.1)
+    assert b.mode_request(200.2) is None                            # not fought after the restart either
+    b.on_faults("/sim/faults", [fault("door_open", True), fault("estop", True)], 200.3)
+    req = b.mode_request(200.4)                                     # a new error: at once, not after the wait
+    assert req.mode == "alarm" and "device.estop" in req.reason
+    # A switch that was due when the node stopped is still due after its restart.
+    c = make()
+    c.on_mode("running", "ui")
+    c.on_faults("/sim/faults", [fault("door_open", True)], 1.0)
+    assert c.mode_request(1.0).mode == "alarm"                     # asked, never answered: the node stopped
+    assert c.memory()["want_alarm"] is True
+    d = _restarted(c.memory())
+    d.on_mode("running", "ui")
+    d.on_faults("/sim/faults", [fault("door_open", True)], 200.1)
+    assert d.mode_request(200.2).mode == "alarm"
+
+
+@pytest.mark.parametrize("change, why", [
+    ({"previous": "spinning"}, r"previous: 'spinning' is not a mode to give back .*stale"),
+    ({"previous": "alarm"}, r"previous: 'alarm' is not a mode to give back"),
+    ({"previous": 3}, r"previous: expected a mode name or null, got 3"),
+    ({"alarm_mode": "fault"}, r"saved for alarm mode 'fault', the cell file's is 'alarm' \(stale"),
+    ({"seen": "door"}, r"seen: expected a list of alarm ids"),
+    ({"seen": [1]}, r"seen: expected a list of alarm ids"),
+    ({"want_alarm": "yes"}, r"want_alarm: expected true or false"),
+])
+def test_a_stale_or_malformed_memory_is_refused_and_the_core_starts_clean(change: dict, why: str) -> None:
+    memory = dict(_in_alarm_from_running().memory(), **change)
+    b = make(now=200.0)
+    assert re.search(why, b.restore(memory))
+    assert b.memory() == {"alarm_mode": "alarm", "previous": None, "seen": [], "want_alarm": False}
+    assert b.settled(200.0)                                         # nothing remembered: nothing to wait for

@@ -17,7 +17,8 @@ import rospy
 import yaml
 
 from conftest import wait_for
-from sim.tests.conftest import SimProcess
+from nodes_helpers import Nodes, client_node, service_up as _service_up
+from sim.tests.conftest import SimProcess, sim_env
 
 HOST = "127.0.0.61"
 ROOT = Path(__file__).resolve().parents[4]
@@ -57,59 +58,30 @@ class Driver:
         self._thread.join(2)
 
 
-def _service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
-
-
-def _stop(proc: subprocess.Popen) -> None:
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(5)
-
-
 @pytest.fixture(scope="module")
 def cell(roscore: str, tmp_path_factory) -> Iterator[dict]:
     doc = yaml.safe_load((ROOT / "config" / "demo-cell.yaml").read_text())
     doc["alarms"] = {"force_limit_n": 80, "wrench_topics": [WRENCH], "fault_topics": ["/sim/faults"], "timeout_s": 1}
     path = tmp_path_factory.mktemp("alarms") / "cell.yaml"
     path.write_text(yaml.safe_dump(doc))
-    env = dict(os.environ, ROS_MASTER_URI=roscore)
-    env.pop("CELL_CONFIG", None)
     # The sim for its device faults only: no cameras, no sensor topics (a cell file without devices).
-    sim = SimProcess(HOST, ["--no-cameras", "--cell", str(ROOT / "sim/tests/cells/no-devices.yaml")], env)
-    log = tempfile.NamedTemporaryFile("w+", prefix="alarms-node-", suffix=".log", delete=False)
-    mode = subprocess.Popen(["rosrun", "cell_nodes", "operation_mode_node", f"_cell_config:={path}",
-                             "__name:=operation_mode_alarms_test"], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True)
-    node = subprocess.Popen(["rosrun", "cell_nodes", "alarms_node", f"_cell_config:={path}", "__name:=alarms_test"],
-                            stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    sim = SimProcess(HOST, ["--no-cameras", "--cell", str(ROOT / "sim/tests/cells/no-devices.yaml")], sim_env(roscore))
+    nodes = Nodes()
+    nodes.run("operation_mode", "operation_mode_node", f"_cell_config:={path}", "__name:=operation_mode_alarms_test")
+    node = nodes.run("alarms", "alarms_node", f"_cell_config:={path}", "__name:=alarms_test")
     driver = None
     try:
-        if not rospy.core.is_initialized():
-            rospy.init_node("alarms_test_client", anonymous=True, disable_signals=True)
+        client_node("alarms_test_client")
         sim.wait_ready()
-        wait_for(lambda: node.poll() is None and _service_up("/cell/alarms/reset") and _service_up("/cell/set_mode")
-                 and _service_up("/sim/trigger_fault"), 30, what="the nodes' services")
+        nodes.wait_ready("/cell/alarms/reset", "/cell/set_mode", "/sim/trigger_fault", what="the nodes' services")
         driver = Driver()
-        yield {"path": path, "driver": driver, "log": log.name}
+        yield {"path": path, "driver": driver, "log": str(node.log_path)}
     finally:
         if driver:
             driver.stop()
-        _stop(node)
-        _stop(mode)
+        nodes.stop()
         took = sim.stop()
-        output = Path(log.name).read_text()
-        os.unlink(log.name)
-        print(f"\nalarms node log:\n{output[-4000:]}")
-        assert "Traceback" not in output, output[-3000:]
+        nodes.check()
         assert "Traceback" not in sim.output(), sim.output()[-3000:]
         assert took < 5
 

@@ -13,7 +13,8 @@ import rospy
 import yaml
 
 from conftest import wait_for
-from test_alarms_node import Latest, _service_up, _stop, active
+from nodes_helpers import Nodes, client_node
+from test_alarms_node import Latest, active
 
 CELL = {
     "operation_mode": {"topic": "/cell/mode", "set_service": "/cell/set_mode", "modes": ["idle", "alarm"]},
@@ -51,25 +52,22 @@ class Drivers:
 
 @pytest.fixture(scope="module")
 def node(roscore: str) -> Iterator[Drivers]:
-    import subprocess
     path = Path(tempfile.mkdtemp(prefix="alarms-twin-")) / "cell.yaml"
     path.write_text(yaml.safe_dump(CELL))
-    log = tempfile.NamedTemporaryFile("w+", prefix="alarms-twin-", suffix=".log", delete=False)
-    proc = subprocess.Popen(["rosrun", "cell_nodes", "alarms_node", f"_cell_config:={path}",
-                             "__name:=alarms_twin_test"], stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    nodes = Nodes()
+    nodes.run("alarms_twin", "alarms_node", f"_cell_config:={path}", "__name:=alarms_twin_test")
     drivers = None
     try:
-        if not rospy.core.is_initialized():
-            rospy.init_node("alarms_twin_client", anonymous=True, disable_signals=True)
-        wait_for(lambda: proc.poll() is None and _service_up("/cell/alarms/reset"), 30, what="the alarms node")
+        client_node("alarms_twin_client")
+        nodes.wait_ready("/cell/alarms/reset", what="the alarms node")
         drivers = Drivers()
         yield drivers
     finally:
         if drivers:
             drivers.stop()
-        _stop(proc)
-        output = Path(log.name).read_text()
-        assert "Traceback" not in output, output[-3000:]
+        nodes.stop()
+        nodes.check()
+        output = nodes.output("alarms_twin")
         assert "alarms from /cell/manual/left/state, /cell/manual/right/state" in output, output[-3000:]
 
 

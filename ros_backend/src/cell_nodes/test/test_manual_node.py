@@ -3,10 +3,7 @@ over ROS the way the BFF relays the page's calls (services, the jog topic) and w
 from __future__ import annotations
 
 import math
-import os
-import signal
 import subprocess
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -16,7 +13,7 @@ import pytest
 import rospy
 
 from conftest import wait_for
-from sim.tests.conftest import SimProcess
+from nodes_helpers import Nodes, client_node, start_sim
 
 HOST = "127.0.0.53"
 CELL = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
@@ -44,43 +41,19 @@ class Latest:
         return (len(t) - 1) / (t[-1] - t[0]) if len(t) > 2 else 0.0
 
 
-def _service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
-
-
 @pytest.fixture(scope="module")
 def node(roscore: str) -> Iterator[subprocess.Popen]:
-    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:1")
-    env.pop("CELL_CONFIG", None)
-    sim = SimProcess(HOST, ["--no-ros", "--no-cameras"], env)
-    sim.wait_ready()
-    log = tempfile.NamedTemporaryFile("w+", prefix="manual-node-", suffix=".log", delete=False)
-    proc = subprocess.Popen(["rosrun", "cell_nodes", "manual_node", f"_cell_config:={CELL}", f"_ur_host:={HOST}",
-                             "__name:=manual_test"], stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    sim = start_sim(HOST, "--no-ros", "--no-cameras")
+    nodes = Nodes()
+    manual = nodes.run("manual", "manual_node", f"_cell_config:={CELL}", f"_ur_host:={HOST}", "__name:=manual_test")
     try:
-        if not rospy.core.is_initialized():
-            rospy.init_node("manual_test_client", anonymous=True, disable_signals=True)
-        wait_for(lambda: proc.poll() is None and _service_up("/cell/manual/stop"), 30, what="the node's services")
-        yield proc
+        client_node("manual_test_client")
+        nodes.wait_ready("/cell/manual/stop")
+        yield manual.proc
     finally:
-        t0 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(5)
-        took = time.monotonic() - t0
-        print(f"\nthe node stopped {took:.2f} s after SIGINT")
+        nodes.stop()
         sim.stop()
-        output = Path(log.name).read_text()
-        os.unlink(log.name)
-        assert "Traceback" not in output, output[-3000:]
-        assert took < 5, f"the node took {took:.1f} s to stop"
+        nodes.check(within=5)
 
 
 def test_services_topics_and_a_jog_through_ros(node) -> None:

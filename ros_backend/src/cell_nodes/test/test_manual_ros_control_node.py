@@ -12,10 +12,8 @@ The last test freezes the simulated driver (SIGSTOP): keep it last.
 from __future__ import annotations
 
 import collections
-import os
 import signal
 import subprocess
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -26,7 +24,8 @@ import rospy
 import yaml
 
 from conftest import wait_for
-from sim.tests.conftest import SimProcess
+from nodes_helpers import Nodes, client_node
+from sim.tests.conftest import SimProcess, sim_env
 
 TEST_CELL = Path(__file__).resolve().parents[4] / "sim" / "tests" / "cells" / "iiwa-test.yaml"
 JOINTS = [f"r7_joint_{i}" for i in range(1, 8)]
@@ -113,14 +112,6 @@ def near(a, b, tol: float) -> bool:
     return max(abs(x - y) for x, y in zip(a, b)) < tol
 
 
-def _service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
-
-
 class Stack:
     def __init__(self, sim: SimProcess, node: subprocess.Popen) -> None:
         from cell_msgs.msg import RobotState
@@ -157,42 +148,27 @@ def fault(name: str):
 def stack(roscore: str, tmp_path_factory) -> Iterator[Stack]:
     cell = tmp_path_factory.mktemp("iiwa") / "iiwa-manual.yaml"
     cell.write_text(yaml.safe_dump(cell_doc()), encoding="utf-8")
-    env = dict(os.environ, ROS_MASTER_URI=roscore)
-    env.pop("CELL_CONFIG", None)
-    sim = SimProcess("127.0.0.1", ["--cell", str(cell), "--no-cameras"], env)
-    log = tempfile.NamedTemporaryFile("w+", prefix="manual-ros-control-", suffix=".log", delete=False)
-    proc = subprocess.Popen(["rosrun", "cell_nodes", "manual_node", f"_cell_config:={cell}",
-                             "__name:=manual_ros_control_test"], stdout=log, stderr=subprocess.STDOUT,
-                            start_new_session=True, env=env)
+    sim = SimProcess("127.0.0.1", ["--cell", str(cell), "--no-cameras"], sim_env(roscore))
+    nodes = Nodes()
+    manual = nodes.run("manual_ros_control", "manual_node", f"_cell_config:={cell}", "__name:=manual_ros_control_test")
     try:
-        if not rospy.core.is_initialized():
-            rospy.init_node("manual_ros_control_client", anonymous=True, disable_signals=True)
-        s = Stack(sim, proc)
-        wait_for(lambda: proc.poll() is None and _service_up("/cell/manual/stop"), 30, what="the node's services")
+        client_node("manual_ros_control_client")
+        s = Stack(sim, manual.proc)
+        nodes.wait_ready("/cell/manual/stop")
         s.state.wait(lambda m: m.connected and m.robot_mode == "RUNNING", 30,
                      "the node connected to the simulated driver")
         yield s
         for rec in (s.joints, s.state, s.pose):
             rec.sub.unregister()
     finally:
-        t0 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(5)
-        took = time.monotonic() - t0
-        print(f"\nthe node stopped {took:.2f} s after SIGINT")
+        nodes.stop()
         if sim.proc.poll() is None:
             sim.proc.send_signal(signal.SIGCONT)  # the last test froze it
         sim_took = sim.stop()
-        output = Path(log.name).read_text()
-        os.unlink(log.name)
-        assert "Traceback" not in output, output[-3000:]
+        nodes.check(within=5)
+        output = nodes.output("manual_ros_control")
         assert f"manual motion driver (ros_control) for {CONTROLLER}; groups: arm; tools: vacuum" in output, \
             output[-3000:]
-        assert took < 5, f"the node took {took:.1f} s to stop"
         assert sim_took < 2.0, f"the simulated driver took {sim_took:.2f} s to exit on SIGTERM"
         assert "Traceback" not in sim.output(), sim.output()[-3000:]
 

@@ -6,7 +6,6 @@ TCP speeds measured here are wall-clock figures.
 """
 from __future__ import annotations
 
-import os
 import threading
 import time
 from pathlib import Path
@@ -23,21 +22,13 @@ from cell_nodes.manual.controller import UrRtdeConnector
 from cell_nodes.manual.driver import ManualDriver
 from cell_nodes.manual.limits import Limits
 from conftest import wait_for
-from sim.tests.conftest import SimProcess
+from nodes_helpers import start_sim
 
 HOST = "127.0.0.51"          # the module's sim
 RESTART_HOST = "127.0.0.52"  # the reconnection test's own sim
 SECTION = yaml.safe_load((Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml").read_text())["manual"]
 CONFIGS = {name: list(q) for name, q in SECTION["groups"][0]["configurations"].items()}
 HEARTBEAT_S = 0.05           # the page's jog heartbeat period
-
-
-def start_sim(host: str) -> SimProcess:
-    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:1")
-    env.pop("CELL_CONFIG", None)
-    sim = SimProcess(host, ["--no-ros", "--no-cameras"], env)
-    sim.wait_ready()
-    return sim
 
 
 def make_driver(host: str) -> ManualDriver:
@@ -50,7 +41,7 @@ def make_driver(host: str) -> ManualDriver:
 
 @pytest.fixture(scope="module")
 def cell() -> Iterator[tuple[ManualDriver, rtde_receive.RTDEReceiveInterface]]:
-    sim = start_sim(HOST)
+    sim = start_sim(HOST, "--no-ros", "--no-cameras")
     driver = make_driver(HOST)
     watch = rtde_receive.RTDEReceiveInterface(HOST)
     try:
@@ -267,7 +258,7 @@ def test_power_off_is_refused_and_power_on_works_again(cell) -> None:
 
 
 def test_reconnects_after_the_controller_restarts() -> None:
-    sim = start_sim(RESTART_HOST)
+    sim = start_sim(RESTART_HOST, "--no-ros", "--no-cameras")
     driver = make_driver(RESTART_HOST)
     try:
         go_home(driver)
@@ -277,7 +268,7 @@ def test_reconnects_after_the_controller_restarts() -> None:
         print(f"\ncontroller loss noticed after {(time.monotonic() - t0) * 1000:.0f} ms")
         assert driver.state().message == f"robot controller at {RESTART_HOST} is unreachable"
         assert driver.move_named("arm", "pick_approach") == (False, f"robot controller at {RESTART_HOST} is unreachable")
-        sim = start_sim(RESTART_HOST)
+        sim = start_sim(RESTART_HOST, "--no-ros", "--no-cameras")
         t0 = time.monotonic()
         wait_for(lambda: driver.state().connected, 10, interval=0.02, what="reconnected")
         print(f"reconnected {(time.monotonic() - t0) * 1000:.0f} ms after the controller was back")

@@ -6,12 +6,9 @@ a jog moving only its arm, and one stop that stops both."""
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
-import tempfile
 import threading
 import time
-from pathlib import Path
 from typing import Iterator
 
 import pytest
@@ -19,7 +16,8 @@ import rospy
 import yaml
 
 from conftest import wait_for
-from sim.tests.conftest import SimProcess
+from nodes_helpers import Nodes, client_node
+from sim.tests.conftest import SimProcess, sim_env
 
 LEFT, RIGHT = "127.0.3.21", "127.0.3.22"
 UR = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
@@ -72,14 +70,6 @@ class Joints:
         return max(abs(v) for v in self.by_arm[arm].velocity) < 0.01  # type: ignore[attr-defined]
 
 
-def _service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
-
-
 def near(a, b, tol: float = 0.01) -> bool:
     return max(abs(x - y) for x, y in zip(a, b)) < tol
 
@@ -88,41 +78,27 @@ def near(a, b, tol: float = 0.01) -> bool:
 def node(roscore: str, tmp_path_factory) -> Iterator[subprocess.Popen]:
     cell_file = tmp_path_factory.mktemp("twin") / "twin.yaml"
     cell_file.write_text(yaml.safe_dump(CELL))
-    sim_env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:1")
-    for k in ("CELL_CONFIG", "UR_HOST", "UR_HOSTS"):
-        sim_env.pop(k, None)
-    sims = [SimProcess(h, ["--no-ros", "--no-cameras"], sim_env) for h in (LEFT, RIGHT)]
-    for s in sims:
-        s.wait_ready()
-    log = tempfile.NamedTemporaryFile("w+", prefix="manual-twin-", suffix=".log", delete=False)
-    env = dict(os.environ, UR_HOSTS=f"left={LEFT}, right={RIGHT}")
-    env.pop("UR_HOST", None)
-    proc = subprocess.Popen(["rosrun", "cell_nodes", "manual_node", f"_cell_config:={cell_file}",
-                             "__name:=manual_twin_test"], stdout=log, stderr=subprocess.STDOUT,
-                            start_new_session=True, env=env)
+    sims = []
+    nodes = Nodes()
     try:
-        if not rospy.core.is_initialized():
-            rospy.init_node("manual_twin_client", anonymous=True, disable_signals=True)
-        wait_for(lambda: proc.poll() is None and _service_up("/cell/manual/stop"), 30, what="the node's services")
-        yield proc
+        sims = [SimProcess(h, ["--no-ros", "--no-cameras"], sim_env()) for h in (LEFT, RIGHT)]  # side by side
+        for s in sims:
+            s.wait_ready()
+        env = dict(os.environ, UR_HOSTS=f"left={LEFT}, right={RIGHT}")
+        env.pop("UR_HOST", None)
+        manual = nodes.run("manual_twin", "manual_node", f"_cell_config:={cell_file}", "__name:=manual_twin_test",
+                           env=env)
+        client_node("manual_twin_client")
+        nodes.wait_ready("/cell/manual/stop")
+        yield manual.proc
     finally:
-        t0 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(5)
-        took = time.monotonic() - t0
-        print(f"\nthe two-arm node stopped {took:.2f} s after SIGINT")
+        nodes.stop()
         for s in sims:
             s.stop()
-        output = Path(log.name).read_text()
-        os.unlink(log.name)
-        assert "Traceback" not in output, output[-3000:]
+        nodes.check(within=5)
+        output = nodes.output("manual_twin")
         assert f"UR controller at {LEFT}; groups: left; tools: gripper" in output, output[-3000:]
         assert f"UR controller at {RIGHT}; groups: right; tools: vacuum" in output, output[-3000:]
-        assert took < 5, f"the node took {took:.1f} s to stop"
 
 
 def test_two_arms_through_one_node(node) -> None:

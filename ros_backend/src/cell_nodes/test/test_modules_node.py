@@ -7,7 +7,6 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
-import tempfile
 import threading
 import time
 import xmlrpc.client
@@ -18,6 +17,7 @@ import pytest
 import rospy
 
 from conftest import wait_for
+from nodes_helpers import Node, Nodes, client_node
 
 CELL = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
 LEFT_RUNNING: list[int] = []  # pids of module nodes left launched: the node must stop them when it stops
@@ -67,38 +67,17 @@ def _alive(pid: int) -> bool:
         return f.read().split(")")[-1].split()[0] != "Z"
 
 
-def _service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
-
-
 @pytest.fixture(scope="module")
 def node(roscore: str) -> Iterator[subprocess.Popen]:
-    log = tempfile.NamedTemporaryFile("w+", prefix="modules-node-", suffix=".log", delete=False)
-    proc = subprocess.Popen(["rosrun", "cell_nodes", "modules_node", f"_cell_config:={CELL}", "__name:=modules_test"],
-                            stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    nodes = Nodes()
+    modules = nodes.run("modules", "modules_node", f"_cell_config:={CELL}", "__name:=modules_test")
     try:
-        if not rospy.core.is_initialized():
-            rospy.init_node("modules_test_client", anonymous=True, disable_signals=True)
-        wait_for(lambda: proc.poll() is None and _service_up("/cell/modules/output"), 30, what="the node's services")
-        yield proc
+        client_node("modules_test_client")
+        nodes.wait_ready("/cell/modules/output")
+        yield modules.proc
     finally:
-        t0 = time.monotonic()
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(5)
-        took = time.monotonic() - t0
-        print(f"\nthe node stopped {took:.2f} s after SIGINT")
-        output = Path(log.name).read_text()
-        os.unlink(log.name)
-        assert "Traceback" not in output, output[-3000:]
-        assert took < 8, f"the node took {took:.1f} s to stop"
+        nodes.stop()
+        nodes.check(within=8)
         left = [p for p in LEFT_RUNNING if _alive(p)]
         for p in left:
             os.kill(p, signal.SIGKILL)
@@ -175,8 +154,7 @@ def test_a_module_started_from_a_terminal_is_seen_and_stopped(node) -> None:
 
     states = States()
     wait_for(lambda: states.state("Diagnostics") == "inactive", 10, what="Diagnostics inactive")
-    term = subprocess.Popen(["rosrun", "cell_nodes", "system_monitor_node"], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True)
+    term = Node("system_monitor_node", label="system_monitor-terminal")
     try:
         wait_for(lambda: states.state("Diagnostics") == "active", 15, what="Diagnostics active (terminal)")
         assert states.now("Diagnostics")[1:3] == ((True,), False)  # alive, not launched by the node
@@ -185,7 +163,7 @@ def test_a_module_started_from_a_terminal_is_seen_and_stopped(node) -> None:
         assert r.success and r.message == "stopping Diagnostics"
         wait_for(lambda: states.state("Diagnostics") == "inactive", 10, what="Diagnostics inactive")
         assert states.since(t0, "Diagnostics")[-2:] == ["transitioning", "inactive"]
-        term.wait(10)  # rosnode-kill made the terminal's node shut down
+        term.proc.wait(10)  # rosnode-kill made the terminal's node shut down
 
         # launched through the service this time, and left running: the node stops it when it stops (fixture)
         r = rospy.ServiceProxy("/cell/modules/launch", ModuleCommand)(name="Diagnostics")
@@ -194,6 +172,4 @@ def test_a_module_started_from_a_terminal_is_seen_and_stopped(node) -> None:
         assert states.now("Diagnostics")[1:3] == ((True,), True)
         LEFT_RUNNING.append(_pid_of("/system_monitor"))
     finally:
-        if term.poll() is None:
-            term.send_signal(signal.SIGINT)
-            term.wait(10)
+        term.stop()

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import os
-import signal
 import subprocess
 
 import pytest
@@ -10,6 +9,7 @@ import rospy
 
 from cell_nodes.operation_mode import OperationMode
 from conftest import wait_for
+from nodes_helpers import Nodes
 
 CELL = os.path.join(os.path.dirname(__file__), "../../../../config/demo-cell.yaml")
 MODES = ["idle", "running", "paused", "alarm", "programming", "manual"]
@@ -38,22 +38,15 @@ def echo_mode() -> str:
 
 @pytest.fixture()
 def mode_node(roscore: str):
-    proc = subprocess.Popen(["rosrun", "cell_nodes", "operation_mode_node", f"_cell_config:={os.path.abspath(CELL)}",
-                             "__name:=operation_mode_test"], start_new_session=True)
+    nodes = Nodes()
+    node = nodes.run("operation_mode", "operation_mode_node", f"_cell_config:={os.path.abspath(CELL)}",
+                     "__name:=operation_mode_test")
     try:
-        wait_for(lambda: _service_up("/cell/get_mode"), 20, what="/cell/get_mode")
-        yield proc
+        nodes.wait_ready("/cell/get_mode", timeout=20)
+        yield node.proc
     finally:
-        proc.send_signal(signal.SIGINT)
-        proc.wait(10)
-
-
-def _service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
+        nodes.stop()
+        nodes.check()
 
 
 def test_node_publishes_latched_mode_and_serves_get_set(mode_node) -> None:

@@ -333,6 +333,20 @@ def test_set_backs_up_and_rotates(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.endswith(".tmp")) == []
 
 
+def test_start_removes_the_temp_files_of_an_interrupted_save(tmp_path: Path) -> None:
+    """A crash mid-save leaves a temp file (test_power_loss.py); the next start removes it and only it."""
+    left = [".parameters.csv.k2j4x_9a.tmp", ".parameters.csv.bak.1.p0q8zz1e.tmp"]
+    kept = [".~lock.parameters.csv#", ".other.csv.k2j4x_9a.tmp", "parameters.csv.tmp"]
+    for name in left + kept:
+        (tmp_path / name).write_text("id,value\n")
+    config = parse_parameters(cell())
+    s = ParameterStore(config, str(tmp_path / config.csv))
+    assert s.start() == ["removed 2 temp files of an interrupted save of parameters.csv",
+                         "parameters.csv did not exist: created from the defaults"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(kept + ["parameters.csv"])
+    assert s.problems == []
+
+
 def test_a_failing_write_leaves_the_old_file_intact(tmp_path: Path, monkeypatch) -> None:
     s = store(tmp_path)
     assert s.set([("parts_per_cycle", "4")]).success

@@ -5,8 +5,6 @@ edit picked up, and a restart that reads the saved values."""
 from __future__ import annotations
 
 import os
-import signal
-import subprocess
 import tempfile
 import threading
 from pathlib import Path
@@ -17,6 +15,7 @@ import rospy
 import yaml
 
 from conftest import wait_for
+from nodes_helpers import Nodes, client_node
 
 CELL = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
 RECIPE = 'Bügel, "links" ✓'
@@ -42,36 +41,16 @@ class Values:
             return dict(self.history[-1]) if self.history else {}
 
 
-def _service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
-
-
-def _start(data_dir: str, log) -> subprocess.Popen:
-    proc = subprocess.Popen(["rosrun", "cell_nodes", "parameters_node", f"_cell_config:={CELL}",
-                             "_check_period_s:=0.2", "__name:=parameters_test"],
-                            env=dict(os.environ, DATA_DIR=data_dir), stdout=log, stderr=subprocess.STDOUT,
-                            start_new_session=True)
-    wait_for(lambda: proc.poll() is None and _service_up("/cell/parameters/set"), 30, what="the node's services")
-    return proc
-
-
-def _stop(proc: subprocess.Popen) -> None:
-    proc.send_signal(signal.SIGINT)
-    try:
-        proc.wait(10)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait(5)
+def _start(data_dir: str) -> Nodes:
+    nodes = Nodes()
+    nodes.run("parameters", "parameters_node", f"_cell_config:={CELL}", "_check_period_s:=0.2",
+              "__name:=parameters_test", env=dict(os.environ, DATA_DIR=data_dir))
+    return nodes
 
 
 @pytest.fixture(scope="module")
 def data_dir(roscore: str) -> Iterator[Path]:
-    if not rospy.core.is_initialized():
-        rospy.init_node("parameters_test_client", anonymous=True, disable_signals=True)
+    client_node("parameters_test_client")
     with tempfile.TemporaryDirectory(prefix="parameters-data-") as d:
         yield Path(d)
 
@@ -83,9 +62,9 @@ def test_get_set_refuse_hand_edit_and_restart(data_dir: Path) -> None:
     items = yaml.safe_load(CELL.read_text())["parameters"]["items"]
     ids = [i["id"] for i in items]
     csv = data_dir / "parameters.csv"
-    log = tempfile.NamedTemporaryFile("w+", prefix="parameters-node-", suffix=".log", delete=False)
-    proc = _start(str(data_dir), log)
+    first = _start(str(data_dir))
     try:
+        first.wait_ready("/cell/parameters/set")
         get = rospy.ServiceProxy("/cell/parameters/get", GetParameters)
         set_ = rospy.ServiceProxy("/cell/parameters/set", SetParameters)
 
@@ -145,16 +124,16 @@ def test_get_set_refuse_hand_edit_and_restart(data_dir: Path) -> None:
         wait_for(lambda: values.messages[-1] == reply.message, 5, what="the problem on the topic")
         assert {p.id: p.value for p in reply.parameters}["gripper_type"] == "parallel"
     finally:
-        _stop(proc)
+        first.stop()
+    first.check()
+    assert "Gripper type: 'suction' is not one of" in first.output("parameters")  # the node logged the warning
 
     # --- a restart reads the saved values
-    proc = _start(str(data_dir), log)
+    again = _start(str(data_dir))
     try:
+        again.wait_ready("/cell/parameters/set")
         got = {p.id: p.value for p in get().parameters}
         assert (got["approach_height"], got["recipe_name"], got["parts_per_cycle"]) == ("60.5", RECIPE, "7")
     finally:
-        _stop(proc)
-        output = Path(log.name).read_text()
-        os.unlink(log.name)
-        assert "Traceback" not in output, output[-3000:]
-        assert "Gripper type: 'suction' is not one of" in output  # the node logged the warning
+        again.stop()
+    again.check()

@@ -3,7 +3,9 @@ fake robot and a fake clock (sequencing, cycling, pause, resume, stop, single op
 topic, routines), the operation-mode rules and the client's state, refusals and cycle counter."""
 from __future__ import annotations
 
+import json
 import math
+import re
 import threading
 import time
 from pathlib import Path
@@ -12,7 +14,7 @@ from typing import Any, Callable, Optional
 import pytest
 import yaml
 
-from cell_nodes.process.client import LOG_SIZE, ProcessClient
+from cell_nodes.process.client import LOG_SIZE, ProcessClient, memory_problem
 from cell_nodes.process.conditions import ConditionError, field_value, holds
 from cell_nodes.process.config import ConfigError, MovePose, Tool, parse_cell_process, parse_process
 from cell_nodes.process.executor import (ERROR, IDLE, PAUSED, PAUSING, RUNNING, STOPPING, Executor, Progress,
@@ -904,3 +906,88 @@ def test_at_start_needs_every_listed_group_there() -> None:
     by_name = ProcessClient(parse_process(twin_section(start_configuration="home"), TWIN_MANUAL))
     by_name.on_joints(LEFT_HOME)                             # no group: process.group
     assert by_name.at_start()
+
+
+# ================================================================================================ cycle times, restarts
+def test_a_cycles_active_time_excludes_the_paused_time_and_its_elapsed_time_includes_it() -> None:
+    h = Harness()
+    gate = h.robot.gate("tool")            # cycle 1's second step blocks until released
+    h.start(RunRequest(-1, 2))
+    wait_for(h.robot.blocked.is_set, 5, what="the tool step running")
+    assert h.ex.pause()[0]
+    del h.robot.gates["tool"]
+    gate.set()
+    wait_for(lambda: h.state() == PAUSED, 5, what="paused")
+    p = h.ex.progress()
+    assert p.paused_since > 0 and p.cycle_paused_s == 0
+    active, elapsed = p.cycle_times(h.clock.now())
+    assert active == pytest.approx(2.0)                     # two steps of 1 s: pausing is still the step's time
+    h.clock.sleep(30)                                       # a long pause
+    active2, elapsed2 = h.ex.progress().cycle_times(h.clock.now())
+    assert active2 == pytest.approx(2.0) and elapsed2 >= elapsed + 30
+    assert h.ex.resume() == (True, "resumed")
+    r = h.join()
+    assert r.success
+    first = next(p for p in h.progress if p.cycles_done == 1)
+    assert first.last_cycle_s == pytest.approx(10.5)        # as without the pause (10 steps of 1 s + a 0.5 s wait)
+    assert first.last_cycle_elapsed_s >= 40.5
+    assert first.paused_since == 0 and first.cycle_paused_s >= 30
+    cycle_lines = [t for t in h.texts() if t.startswith("Cycle")]
+    assert re.fullmatch(r"Cycle 1 done in 10\.5 s \(4\d\.\d s with pauses\)", cycle_lines[0]), cycle_lines
+    assert cycle_lines[1] == "Cycle 2 done in 10.5 s"       # no pause: one figure
+    assert (r.last_cycle_s, r.last_cycle_elapsed_s) == (pytest.approx(10.5), pytest.approx(10.5))
+    assert h.progress[-1].paused_since == 0
+
+
+def test_client_shows_active_and_elapsed_cycle_times_and_its_counter_survives_a_restart() -> None:
+    c, clock = client()
+    c.start(0)
+    t = clock.now()
+    c.on_feedback(Progress(RUNNING, 0, 1, 6, "Gripper open", 1, 0, t - 10, 0, "running", cycle_paused_s=4.0))
+    v = c.view()
+    assert (v.cycle_time_s, v.cycle_elapsed_s) == (pytest.approx(6), pytest.approx(10))
+    c.on_feedback(Progress(PAUSED, 0, 1, 6, "Gripper open", 1, 0, t - 10, 0, "running", cycle_paused_s=4.0,
+                           paused_since=t - 2))
+    clock.sleep(5)                                          # still paused: only the elapsed time goes on
+    v = c.view()
+    assert (v.cycle_time_s, v.cycle_elapsed_s) == (pytest.approx(4), pytest.approx(15))
+    # Cycle 1 completes: the counter moves on at once, with both times.
+    c.on_feedback(Progress(RUNNING, 0, 0, 6, "Move to home", 2, 1, clock.now(), 12.0, "running",
+                           last_cycle_elapsed_s=19.0))
+    v = c.view()
+    assert (c.next_cycle, v.cycle, v.last_cycle_s, v.last_cycle_elapsed_s) == (2, 2, 12.0, 19.0)
+    assert c.memory() == {"next_cycle": 2, "last_cycle_s": 12.0, "last_cycle_elapsed_s": 19.0}
+    # The nodes restart (mid-run even): the new client takes the saved memory back, through its JSON file.
+    d, _ = client()
+    assert d.restore(json.loads(json.dumps(c.memory()))) is None
+    v = d.view()
+    assert (v.state, v.cycle, v.cycles_done, v.last_cycle_s, v.last_cycle_elapsed_s, v.cycle_time_s) == (
+        IDLE, 2, 0, 12.0, 19.0, 0.0)
+    assert d.start(1)[0].first_cycle == 2                  # the interrupted cycle 2 runs again, not cycle 1
+    # Without a memory (what a restart did before): counting from 1 again.
+    assert client()[0].view().cycle == 1
+    c.on_result(RunResult(False, "stopped by the operator", IDLE, True, 1, 12.0, last_cycle_elapsed_s=19.0))
+    v = c.view()
+    assert (v.cycle, v.cycle_time_s, v.cycle_elapsed_s, v.last_cycle_elapsed_s) == (2, 0.0, 0.0, 19.0)
+    # An older server without the elapsed field: the active time stands for both.
+    c.start(1)
+    c.on_result(RunResult(True, "1 cycle done", IDLE, False, 1, 11.0))
+    assert (c.view().last_cycle_s, c.view().last_cycle_elapsed_s, c.next_cycle) == (11.0, 11.0, 3)
+
+
+@pytest.mark.parametrize("change, why", [
+    ({"next_cycle": 0}, r"next_cycle: expected a whole number from 1 to 4294967295, got 0"),
+    ({"next_cycle": 2.5}, r"next_cycle: expected a whole number"),
+    ({"next_cycle": True}, r"next_cycle: expected a whole number"),
+    ({"next_cycle": 2 ** 32}, r"next_cycle: expected a whole number"),
+    ({"last_cycle_s": -1}, r"last_cycle_s: expected a number of seconds"),
+    ({"last_cycle_s": "10"}, r"last_cycle_s: expected a number of seconds"),
+    ({"last_cycle_elapsed_s": None}, r"last_cycle_elapsed_s: expected a number of seconds"),
+    ({"last_cycle_elapsed_s": 5.0}, r"last_cycle_elapsed_s \(5\.0\) is below last_cycle_s \(12\.0\)"),
+])
+def test_client_refuses_a_malformed_memory_and_counts_from_1(change: dict, why: str) -> None:
+    memory = dict({"next_cycle": 7, "last_cycle_s": 12.0, "last_cycle_elapsed_s": 19.0}, **change)
+    assert re.search(why, memory_problem(memory))
+    c, _ = client()
+    assert re.search(why, c.restore(memory))
+    assert c.memory() == {"next_cycle": 1, "last_cycle_s": 0.0, "last_cycle_elapsed_s": 0.0}

@@ -18,6 +18,7 @@ import rospy
 import yaml
 
 from conftest import wait_for
+from nodes_helpers import Nodes, client_node, service_up
 
 ROOT = Path(__file__).resolve().parents[4]
 HOME = [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
@@ -43,59 +44,7 @@ class Latest:
             return any(pred(m) for m in self.msgs)
 
 
-def service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
-
-
-class Procs:
-    """rosrun'd nodes with their output in log files; stopped with SIGINT; their logs must hold no traceback."""
-
-    def __init__(self) -> None:
-        self.procs: list[tuple[str, subprocess.Popen, Any]] = []
-
-    def run(self, name: str, *args: str) -> subprocess.Popen:
-        log = tempfile.NamedTemporaryFile("w+", prefix=f"{name}-", suffix=".log", delete=False)
-        proc = subprocess.Popen(["rosrun", "cell_nodes", *args], stdout=log, stderr=subprocess.STDOUT,
-                                start_new_session=True)
-        self.procs.append((name, proc, log))
-        return proc
-
-    def alive(self) -> bool:
-        """True while every node runs; a node that exited fails the test at once with its output."""
-        for name, proc, log in self.procs:
-            if proc.poll() is not None:
-                raise AssertionError(f"{name} exited ({proc.returncode}):\n{Path(log.name).read_text()[-3000:]}")
-        return True
-
-    def output(self, name: str) -> str:
-        return next(Path(log.name).read_text() for n, _, log in self.procs if n == name)
-
-    def stop(self) -> dict[str, float]:
-        took: dict[str, float] = {}
-        for _, proc, _ in self.procs:
-            if proc.poll() is None:
-                proc.send_signal(signal.SIGINT)
-        for name, proc, _ in self.procs:
-            t0 = time.monotonic()
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait(5)
-            took[name] = time.monotonic() - t0
-        outputs = {name: Path(log.name).read_text() for name, _, log in self.procs}
-        for _, _, log in self.procs:
-            os.unlink(log.name)
-        for name, text in outputs.items():
-            assert "Traceback" not in text, f"{name}:\n{text[-3000:]}"
-        return took
-
-
-def start_process_nodes(procs: Procs, cell: Path, tag: str) -> None:
+def start_process_nodes(procs: Nodes, cell: Path, tag: str) -> None:
     procs.run("process_server", "process_server", f"_cell_config:={cell}", f"__name:={tag}_server")
     procs.run("process_node", "process_node", f"_cell_config:={cell}", f"__name:={tag}_client")
 
@@ -220,20 +169,18 @@ def cell(roscore: str) -> Iterator[dict]:
         {"wait_topic": READY_TOPIC, "field": "data", "equals": True, "timeout_s": 10}, {"routine": "demo_routine"}]})
     path = Path(tempfile.mkdtemp(prefix="process-node-")) / "cell.yaml"
     path.write_text(yaml.safe_dump(doc))
-    if not rospy.core.is_initialized():
-        rospy.init_node("process_test_client", anonymous=True, disable_signals=True)
+    client_node("process_test_client")
     from std_msgs.msg import Bool
     driver = StandInDriver()
     # The "check" operation's condition: true (latched) unless a test says otherwise, so whole cycles pass it.
     ready = rospy.Publisher(READY_TOPIC, Bool, queue_size=5, latch=True)
     ready.publish(Bool(True))
-    procs = Procs()
+    procs = Nodes()
     procs.run("operation_mode", "operation_mode_node", f"_cell_config:={path}", "__name:=process_test_mode")
     start_process_nodes(procs, path, "process_test")
     ui = Ui()
     try:
-        wait_for(lambda: procs.alive() and service_up("/cell/process/start") and service_up("/cell/set_mode"), 30,
-                 what="the process nodes' services")
+        procs.wait_ready("/cell/process/start", "/cell/set_mode", what="the process nodes' services")
         ui.wait_state("idle", 10)
         wait_for(lambda: ui.state.msg.ready, 10, what="the client seeing the action server")
         yield {"driver": driver, "ui": ui, "procs": procs, "ready": ready}
@@ -241,9 +188,8 @@ def cell(roscore: str) -> Iterator[dict]:
         ui.close()
         ready.unregister()
         driver.shutdown()   # the stand-in services must not outlive this module (the sim test has a real driver)
-        took = procs.stop()
-        print(f"\nnodes stopped after SIGINT in: {', '.join(f'{k} {v:.2f} s' for k, v in took.items())}")
-        assert max(took.values()) < 5
+        procs.stop()
+        procs.check(within=5)
 
 
 @pytest.fixture

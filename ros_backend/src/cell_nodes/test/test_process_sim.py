@@ -6,7 +6,6 @@ stop must end a run in error with the driver's message."""
 from __future__ import annotations
 
 import math
-import os
 import time
 from pathlib import Path
 from typing import Any, Iterator
@@ -15,8 +14,9 @@ import pytest
 import rospy
 
 from conftest import wait_for
-from sim.tests.conftest import SimProcess
-from test_process_node import Latest, Procs, Ui, service_up, start_process_nodes
+from nodes_helpers import Nodes, client_node
+from sim.tests.conftest import SimProcess, sim_env
+from test_process_node import Latest, Ui, start_process_nodes
 
 HOST = "127.0.0.66"
 CELL = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
@@ -56,15 +56,12 @@ class Joints:
 
 @pytest.fixture(scope="module")
 def cell(roscore: str) -> Iterator[dict]:
-    env = dict(os.environ, ROS_MASTER_URI=roscore)
-    env.pop("CELL_CONFIG", None)
-    sim = SimProcess(HOST, ["--no-cameras", "--cell", str(CELL)], env)
-    procs = Procs()
+    sim = SimProcess(HOST, ["--no-cameras", "--cell", str(CELL)], sim_env(roscore))
+    procs = Nodes()
     ui = joints = objects = None
     try:
         sim.wait_ready()
-        if not rospy.core.is_initialized():
-            rospy.init_node("process_test_client", anonymous=True, disable_signals=True)
+        client_node("process_test_client")
         from cell_msgs.msg import RobotState
         from geometry_msgs.msg import PoseArray
         procs.run("operation_mode", "operation_mode_node", f"_cell_config:={CELL}", "__name:=process_sim_mode")
@@ -73,8 +70,7 @@ def cell(roscore: str) -> Iterator[dict]:
         ui, joints = Ui(), Joints()
         objects = Latest("/sim/objects", PoseArray)
         robot = Latest("/cell/manual/arm/state", RobotState)
-        wait_for(lambda: procs.alive() and service_up("/cell/process/start") and service_up("/cell/manual/stop"),
-                 30, what="the nodes' services")
+        procs.wait_ready("/cell/process/start", "/cell/manual/stop", what="the nodes' services")
         wait_for(lambda: robot.msg is not None and robot.msg.connected and joints.msg is not None, 15,
                  what="the driver connected to the sim")
         robot.sub.unregister()
@@ -88,11 +84,9 @@ def cell(roscore: str) -> Iterator[dict]:
                 rec.sub.unregister()
         if ui is not None:
             ui.close()
-        try:
-            took = procs.stop()
-            print(f"\nnodes stopped after SIGINT in: {', '.join(f'{k} {v:.2f} s' for k, v in took.items())}")
-        finally:
-            sim.stop()  # also when a node's log failed the test: never leave a sim behind
+        procs.stop()
+        sim.stop()
+        procs.check()
         assert "Traceback" not in sim.output(), sim.output()[-3000:]
 
 

@@ -12,7 +12,8 @@ import rospy
 import yaml
 
 from conftest import wait_for
-from test_process_node import HOME, Latest, Procs, service_up
+from nodes_helpers import Nodes, client_node
+from test_process_node import HOME, Latest
 
 UR = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
 CELL = {
@@ -33,21 +34,21 @@ RIGHT_HOME = [-0.5, 1.0, 1.0, 1.0, 1.0, 0.5]
 
 
 @pytest.fixture(scope="module")
-def client(roscore: str) -> Iterator[Procs]:
+def client(roscore: str) -> Iterator[Nodes]:
     path = Path(tempfile.mkdtemp(prefix="process-twin-")) / "cell.yaml"
     path.write_text(yaml.safe_dump(CELL))
-    if not rospy.core.is_initialized():
-        rospy.init_node("process_twin_client_test", anonymous=True, disable_signals=True)
-    procs = Procs()
-    procs.run("process_node", "process_node", f"_cell_config:={path}", "__name:=process_twin_client")
+    client_node("process_twin_client_test")
+    nodes = Nodes()
+    nodes.run("process_node", "process_node", f"_cell_config:={path}", "__name:=process_twin_client")
     try:
-        wait_for(lambda: procs.alive() and service_up("/cell/process/start"), 30, what="the process client")
-        yield procs
+        nodes.wait_ready("/cell/process/start", what="the process client")
+        yield nodes
     finally:
-        assert max(procs.stop().values()) < 5
+        nodes.stop()
+        nodes.check(within=5)
 
 
-def test_at_start_follows_every_listed_group(client: Procs) -> None:
+def test_at_start_follows_every_listed_group(client: Nodes) -> None:
     from cell_msgs.msg import ProcessState, RobotState
     state = Latest("/cell/process/state", ProcessState)
     pubs = {g: rospy.Publisher(f"/cell/manual/{g}/state", RobotState, queue_size=5) for g in ("left", "right")}

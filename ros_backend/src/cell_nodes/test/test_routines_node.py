@@ -10,7 +10,6 @@ import os
 import re
 import signal
 import subprocess
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -21,7 +20,7 @@ import rospy
 import yaml
 
 from conftest import wait_for
-from sim.tests.conftest import SimProcess
+from nodes_helpers import Nodes, client_node, start_sim
 
 HOST = "127.0.0.71"
 DEMO = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
@@ -49,35 +48,6 @@ class Recorder:
             return [m for t, m in self.msgs if t >= t0]
 
 
-def _service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
-
-
-def _start(args: list[str], env: dict[str, str], prefix: str) -> tuple[subprocess.Popen, str]:
-    log = tempfile.NamedTemporaryFile("w+", prefix=prefix, suffix=".log", delete=False)
-    proc = subprocess.Popen(["rosrun", "cell_nodes", *args], env=env, stdout=log, stderr=subprocess.STDOUT,
-                            start_new_session=True)
-    return proc, log.name
-
-
-def _stop(proc: subprocess.Popen, log_path: str) -> tuple[float, str]:
-    t0 = time.monotonic()
-    proc.send_signal(signal.SIGINT)
-    try:
-        proc.wait(10)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait(5)
-    took = time.monotonic() - t0
-    output = Path(log_path).read_text()
-    os.unlink(log_path)
-    return took, output
-
-
 class Cell:
     def __init__(self, data_dir: Path, routines: subprocess.Popen) -> None:
         self.data_dir = data_dir
@@ -92,31 +62,23 @@ def cell(roscore: str, tmp_path_factory) -> Iterator[Cell]:
     cell["routines"]["speed"] = 0.25
     cell_file = data_dir / "cell.yaml"
     cell_file.write_text(yaml.safe_dump(cell))
-    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:1")
-    env.pop("CELL_CONFIG", None)
-    sim = SimProcess(HOST, ["--no-ros", "--no-cameras"], env)
-    sim.wait_ready()
+    sim = start_sim(HOST, "--no-ros", "--no-cameras")
     node_env = dict(os.environ, DATA_DIR=str(data_dir))
     node_env.pop("CELL_CONFIG", None)
-    manual, manual_log = _start(["manual_node", f"_cell_config:={cell_file}", f"_ur_host:={HOST}",
-                                 "__name:=manual_routines_test"], node_env, "manual-node-")
-    routines, routines_log = _start(["routines_node", f"_cell_config:={cell_file}", "__name:=routines_test"],
-                                    node_env, "routines-node-")
+    nodes = Nodes()
+    nodes.run("manual", "manual_node", f"_cell_config:={cell_file}", f"_ur_host:={HOST}",
+              "__name:=manual_routines_test", env=node_env)
+    routines = nodes.run("routines", "routines_node", f"_cell_config:={cell_file}", "__name:=routines_test",
+                         env=node_env)
     try:
-        if not rospy.core.is_initialized():
-            rospy.init_node("routines_test_client", anonymous=True, disable_signals=True)
-        wait_for(lambda: manual.poll() is None and _service_up("/cell/manual/stop"), 30, what="the driver's services")
-        wait_for(lambda: routines.poll() is None and _service_up("/cell/routines/stop"), 30,
-                 what="the routines node's services")
-        yield Cell(data_dir, routines)
+        client_node("routines_test_client")
+        nodes.wait_ready("/cell/manual/stop", "/cell/routines/stop")
+        yield Cell(data_dir, routines.proc)
     finally:
-        took, output = _stop(routines, routines_log)
-        print(f"\nthe routines node stopped {took:.2f} s after SIGINT")
-        _, manual_output = _stop(manual, manual_log)
+        nodes.stop()
         sim.stop()
-        assert "Traceback" not in output, output[-3000:]
-        assert "Traceback" not in manual_output, manual_output[-3000:]
-        assert took < 5, f"the routines node took {took:.1f} s to stop"
+        nodes.check()
+        assert routines.took < 5, f"the routines node took {routines.took:.1f} s to stop"
 
 
 def speed(state) -> float:

@@ -47,8 +47,10 @@ export const STATE_VIEW = Object.freeze({
  * @property {number} cycle
  * @property {number} cyclesTarget  0: until stopped
  * @property {number} cyclesDone
- * @property {number} cycleTimeS
- * @property {number} lastCycleS
+ * @property {number} cycleTimeS  the current cycle's active time (paused time excluded)
+ * @property {number} cycleElapsedS  the same, paused time included
+ * @property {number} lastCycleS  the last completed cycle's active time
+ * @property {number} lastCycleElapsedS  the same, paused time included
  * @property {boolean} atStart
  * @property {string} startConfiguration
  * @property {string} message
@@ -82,7 +84,9 @@ export function processView(msg, fallbackOperations = []) {
     cyclesTarget: num(msg?.cycles_target),
     cyclesDone: num(msg?.cycles_done),
     cycleTimeS: num(msg?.cycle_time_s),
+    cycleElapsedS: num(msg?.cycle_elapsed_s),
     lastCycleS: num(msg?.last_cycle_s),
+    lastCycleElapsedS: num(msg?.last_cycle_elapsed_s),
     atStart: !!msg?.at_start,
     startConfiguration: String(msg?.start_configuration ?? ''),
     message: String(msg?.message ?? ''),
@@ -142,6 +146,19 @@ export function formatSeconds(s) {
   if (s < 60) return `${s.toFixed(1)} s`;
   const m = Math.floor(s / 60);
   return `${m} min ${Math.round(s - m * 60)} s`;
+}
+
+/**
+ * A cycle's time as the page shows it: the active time, and the time with pauses beside it when they differ
+ * ("12.3 s (14.1 s with pauses)"). A node without the elapsed field (0) shows the active time alone.
+ * @param {number} activeS  paused time excluded
+ * @param {number} elapsedS  paused time included
+ * @returns {string}
+ */
+export function cycleTimeText(activeS, elapsedS) {
+  const active = formatSeconds(activeS);
+  const elapsed = formatSeconds(elapsedS);
+  return elapsedS > activeS && elapsed !== active ? `${active} (${elapsed} with pauses)` : active;
 }
 
 /** @param {ProcessView} v @returns {string} "Cycle 2 of 5" / "Cycle 2" / "Not started" */

@@ -37,6 +37,7 @@ class AlarmsConfig:
     startup_grace_s: float = 10.0               # an expected driver that never published by then: alarm
     severity: tuple[tuple[str, int], ...] = ()  # (alarm id glob, severity), first match wins
     alarm_mode: str = ""                        # "" : never touch the operation mode
+    modes: tuple[str, ...] = ()                 # the cell's operation modes (a remembered mode must be one of them)
     mode_topic: str = "/cell/mode"
     set_mode_service: str = "/cell/set_mode"
     publish_period_s: float = 1.0
@@ -145,6 +146,7 @@ def parse_alarms(cell: Mapping[str, Any]) -> AlarmsConfig:
         raise ConfigError(f"alarms.alarm_mode: expected a mode name or \"\", got {wanted!r}")
     modes = mode.get("modes") or []
     kw["alarm_mode"] = wanted if wanted and wanted in modes else ""
+    kw["modes"] = tuple(m for m in modes if isinstance(m, str))
     kw["mode_topic"] = mode.get("topic", "/cell/mode")
     kw["set_mode_service"] = mode.get("set_service", "/cell/set_mode")
     return AlarmsConfig(**kw)

@@ -2,10 +2,10 @@
 reset clears, and the operation-mode switches. Every input carries its timestamp (seconds); no clock, no ROS."""
 from __future__ import annotations
 
-from typing import Any, Iterable, Optional
+from typing import Any, Iterable, Mapping, Optional
 
 from .config import AlarmsConfig, default_robot_state_topic
-from .mode import ModeKeeper, ModeRequest
+from .mode import ModeKeeper, ModeRequest, memory_problem
 from .sources import (ForceWatch, RobotInfo, SilenceWatch, combined_robot, fault_conditions, module_conditions,
                       robot_alarm_id, robot_conditions, robot_text, wrench_force)
 from .status import SafetyStatus, overall
@@ -45,6 +45,10 @@ class Alarms:
         self._last_status: Optional[SafetyStatus] = None
         self._last_output = now
         self._list_dirty = True
+        # After a restart with a remembered mode: the sources not heard since the start. Until each has reported (or
+        # the start-up grace is over, when the silent ones are alarms), the remembered mode is not given back.
+        self._holding = False
+        self._unheard: set[str] = set()
 
     # ------------------------------------------------------------------------------------------ inputs
     def _report(self, key: str, conditions: Iterable[Condition], now: float) -> bool:
@@ -86,6 +90,7 @@ class Alarms:
 
     def on_faults(self, topic: str, alarms: Iterable[Any], now: float) -> bool:
         """cell_msgs/AlarmList.alarms of a device fault topic (/sim/faults)."""
+        self._unheard.discard(f"faults:{topic}")
         return self._report(f"faults:{topic}", fault_conditions(alarms), now)
 
     def on_wrench(self, topic: str, msg: Any, now: float) -> bool:
@@ -94,6 +99,7 @@ class Alarms:
         if watch is None:
             return False
         self._force_silence[topic].heard(now)
+        self._unheard.discard(f"force:{topic}")
         changed = self._report(f"force:{topic}", watch.update(wrench_force(msg)), now)
         if topic in self._force_silent:
             self._force_silent.discard(topic)
@@ -102,6 +108,7 @@ class Alarms:
 
     def on_modules(self, modules: Iterable[Any], now: float) -> bool:
         """cell_msgs/ModuleStates.modules (name, state) from the modules node."""
+        self._unheard.discard("modules")
         return self._report("modules", module_conditions(modules), now)
 
     def tick(self, now: float) -> bool:
@@ -154,8 +161,38 @@ class Alarms:
     def on_mode(self, mode: str, source: str) -> None:
         self.keeper.on_mode(mode, source)
 
-    def mode_request(self) -> Optional[ModeRequest]:
-        return self.keeper.decide(self.table.active_ids(ERROR))
+    def mode_request(self, now: Optional[float] = None) -> Optional[ModeRequest]:
+        return self.keeper.decide(self.table.active_ids(ERROR), self.settled(now))
+
+    # ------------------------------------------------------------------------------------------ across a restart
+    def memory(self) -> dict[str, Any]:
+        """What the node saves in its state file (the mode keeper's memory)."""
+        return self.keeper.memory()
+
+    def restore(self, memory: Mapping[str, Any]) -> Optional[str]:
+        """Take back the memory saved before a restart; returns what is wrong with it (then nothing is taken)."""
+        why = memory_problem(memory, self.config.alarm_mode, self.config.modes)
+        if why is not None:
+            return why
+        self.keeper.restore(memory)
+        if ModeKeeper.remembers(memory):
+            self._holding = True
+            self._unheard = {f"faults:{t}" for t in self.config.fault_topics} | {f"force:{t}" for t in self._force}
+            self._unheard.add("modules")
+        return None
+
+    def settled(self, now: Optional[float] = None) -> bool:
+        """Whether the alarm table is known again after a restart with a remembered mode: every source reported
+        (a robot's state counts once it is not held back as a first connection), or the start-up grace is over
+        (the silent sources are alarms by then: tick raises them at the same `now`). Always true without a
+        remembered mode. Once true, it stays true."""
+        if not self._holding:
+            return True
+        over = now is not None and now - self._start > max(self.config.startup_grace_s, self.config.timeout_s)
+        robots = all(w.silence.last is not None and w.held_back is None for w in self._robots.values())
+        if over or (robots and not self._unheard):
+            self._holding = False
+        return not self._holding
 
     def mode_done(self, request: ModeRequest, ok: bool) -> None:
         self.keeper.done(request, ok)

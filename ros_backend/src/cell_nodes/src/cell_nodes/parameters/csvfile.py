@@ -149,7 +149,11 @@ def _replace_atomically(path: str, data: bytes, mode: int) -> None:
 
 def write_csv(path: str, data: bytes, backups: int = BACKUPS) -> None:
     """Back the current file up (rotating `backups` copies) and replace it atomically. Raises OSError; the file is
-    then unchanged."""
+    then unchanged.
+
+    Each backup is replaced atomically by a copy of the next newer one (<csv>.bak by the CSV), the oldest first, then
+    the CSV by the new content: a crash or a power cut at any moment leaves each file as it was or as it should
+    become, never missing (renaming the backups along would leave a gap) or torn."""
     os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
     try:
         st = os.stat(path)
@@ -158,10 +162,31 @@ def write_csv(path: str, data: bytes, backups: int = BACKUPS) -> None:
     mode = stat.S_IMODE(st.st_mode) if st is not None else 0o644
     if st is not None and backups > 0:
         names = backup_names(path, backups)
-        for older, newer in zip(reversed(names[1:]), reversed(names[:-1])):
-            if os.path.exists(newer):
-                os.replace(newer, older)
-        with open(path, "rb") as f:
-            previous = f.read()
-        _replace_atomically(names[0], previous, mode)
+        for older, newer in reversed(list(zip(names, [path] + names[:-1]))):
+            try:
+                with open(newer, "rb") as f:
+                    content = f.read()
+            except FileNotFoundError:
+                continue
+            _replace_atomically(older, content, mode)
     _replace_atomically(path, data, mode)
+
+
+def remove_temp_files(path: str) -> int:
+    """Remove the temp files a crash mid-save left next to `path` (and its backups); only the parameters node writes
+    there. Returns how many."""
+    directory = os.path.dirname(path) or "."
+    prefix = f".{os.path.basename(path)}."
+    removed = 0
+    try:
+        entries = os.listdir(directory)
+    except OSError:
+        return 0
+    for name in entries:
+        if name.startswith(prefix) and name.endswith(".tmp"):
+            try:
+                os.unlink(os.path.join(directory, name))
+                removed += 1
+            except OSError:
+                pass
+    return removed

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from typing import Iterable, Optional, Sequence
 
 from .config import ParametersConfig
-from .csvfile import BACKUPS, read_csv, render, write_csv
+from .csvfile import BACKUPS, read_csv, remove_temp_files, render, write_csv
 from .values import InvalidValue, ParamDef, Value, canonical, typed
 
 Signature = Optional[tuple[int, int, int]]
@@ -56,8 +56,11 @@ class ParameterStore:
         return (st.st_ino, st.st_size, st.st_mtime_ns)
 
     def start(self) -> list[str]:
-        """Load the file; a missing one is created from the defaults. Returns notes for the log."""
-        return self._load(creating_from="the defaults")
+        """Remove the temp files of an interrupted save, load the file; a missing one is created from the defaults.
+        Returns notes for the log."""
+        removed = remove_temp_files(self.path)
+        notes = [f"removed {_plural(removed, 'temp file')} of an interrupted save of {self.name}"] if removed else []
+        return notes + self._load(creating_from="the defaults")
 
     def refresh(self) -> tuple[bool, list[str]]:
         """Re-read the file if it changed on disk. Returns (the values or problems changed, notes for the log)."""

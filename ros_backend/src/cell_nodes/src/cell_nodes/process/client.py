@@ -6,17 +6,25 @@ the part-cycle counter, "at the start configuration", and the log history.
   is in alarm, or the section is unusable), each with a message the page shows as is.
 - The cycle counter: a run starts at the cycle after the last completed one (pose tables pick their entry by it);
   an interrupted cycle is not counted, so the next Start repeats it. Running the last operation alone (Step)
-  completes a cycle too. The counter starts at 1 when the node starts.
+  completes a cycle too. The counter moves on as each cycle completes (not only at the run's end).
+- Across a restart of the nodes: the counter and the last cycle's times are the client's `memory()`; the node saves
+  it in a state file whenever it changes (so after every completed cycle) and `restore`s it at start. Without a
+  saved memory the counter starts at 1.
+- Cycle times: `cycle_time_s`/`last_cycle_s` are active time (paused time excluded), `cycle_elapsed_s`/
+  `last_cycle_elapsed_s` include the pauses (the executor's Progress carries the paused time).
 """
 from __future__ import annotations
 
 import time
 from collections import deque
 from dataclasses import dataclass
-from typing import Callable, Optional, Sequence
+from typing import Any, Callable, Mapping, Optional, Sequence
 
+from ..state_file import finite_number
 from .config import ProcessConfig
 from .executor import ACTIVE_STATES, ERROR, IDLE, PAUSED, RUNNING, STOPPING, Progress, RunRequest, RunResult
+
+MAX_CYCLE = 2 ** 32 - 1     # ProcessState.cycle is a uint32
 
 LOG_SIZE = 200
 
@@ -58,8 +66,10 @@ class StateView:
     cycle: int
     cycles_target: int
     cycles_done: int
-    cycle_time_s: float
+    cycle_time_s: float            # active time of the current cycle (paused time excluded)
+    cycle_elapsed_s: float         # the same, paused time included
     last_cycle_s: float
+    last_cycle_elapsed_s: float
     at_start: bool
     start_configuration: str
     message: str
@@ -89,7 +99,10 @@ class ProcessClient:
         self.cycles_target = 0
         self.cycles_done = 0
         self.cycle_start = 0.0
+        self.cycle_paused_s = 0.0
+        self.paused_since = 0.0
         self.last_cycle_s = 0.0
+        self.last_cycle_elapsed_s = 0.0
         self.message = config_error or "ready"
         if config_error:
             self.state = ERROR
@@ -169,6 +182,7 @@ class ProcessClient:
         self.current, self.step, self.step_index, self.step_count = -1, "", -1, 0
         self.cycle, self.cycles_target, self.cycles_done = req.first_cycle, req.cycles, 0
         self.cycle_start = self.clock()
+        self.cycle_paused_s = self.paused_since = 0.0
         self.message = "starting"
         return req, "starting"
 
@@ -202,10 +216,15 @@ class ProcessClient:
             self.state = fb.state
         self.current, self.step_index, self.step_count, self.step = fb.operation, fb.step_index, fb.step_count, fb.step
         self.cycle, self.cycles_done = fb.cycle or self.cycle, fb.cycles_done
+        if self.run.operation < 0:
+            # Each completed cycle moves the counter on at once: a restart mid-run keeps the cycles already done.
+            self.next_cycle = max(self.next_cycle, self.run.first_cycle + fb.cycles_done)
         if fb.cycle_start:
             self.cycle_start = fb.cycle_start
+        self.cycle_paused_s, self.paused_since = fb.cycle_paused_s, fb.paused_since
         if fb.last_cycle_s:
             self.last_cycle_s = fb.last_cycle_s
+            self.last_cycle_elapsed_s = fb.last_cycle_elapsed_s or fb.last_cycle_s
         if fb.message:
             self.message = fb.message
 
@@ -225,6 +244,7 @@ class ProcessClient:
         self.cycles_done = result.cycles_done
         if result.last_cycle_s:
             self.last_cycle_s = result.last_cycle_s
+            self.last_cycle_elapsed_s = result.last_cycle_elapsed_s or result.last_cycle_s
         if req.operation < 0:
             self.next_cycle = req.first_cycle + result.cycles_done
         elif result.success and req.operation == len(self.operations) - 1:
@@ -232,7 +252,7 @@ class ProcessClient:
         self.cycle = self.next_cycle
         self.message = result.message or ("stopped" if result.stopped else "")
         self.run_mode = ""
-        self.cycle_start = 0.0
+        self.cycle_start = self.cycle_paused_s = self.paused_since = 0.0
         if result.state == ERROR:
             self.state = ERROR
             self.current, self.step_index, self.step = result.operation, result.step_index, result.step
@@ -245,17 +265,51 @@ class ProcessClient:
         if self.run is None:
             return
         self.on_result(RunResult(False, why, ERROR, False, self.cycles_done, self.last_cycle_s, self.current,
-                                 self.step_index, self.step))
+                                 self.step_index, self.step, self.last_cycle_elapsed_s))
         self.note("error", f"Error: {why}")
 
     # ------------------------------------------------------------------------------------------- output
     def view(self) -> StateView:
-        now = self.clock()
         cfg = self.config
+        active, elapsed = (0.0, 0.0)
+        if self.active:
+            active, elapsed = Progress(cycle_start=self.cycle_start, cycle_paused_s=self.cycle_paused_s,
+                                       paused_since=self.paused_since).cycle_times(self.clock())
         return StateView(
             state=self.state, ready=self.ready, operations=self.operations, current=self.current, step=self.step,
             step_index=self.step_index, step_count=self.step_count, dry_run=self.dry_run, run_mode=self.run_mode,
             cycle=self.cycle, cycles_target=self.cycles_target, cycles_done=self.cycles_done,
-            cycle_time_s=max(0.0, now - self.cycle_start) if self.active and self.cycle_start else 0.0,
-            last_cycle_s=self.last_cycle_s, at_start=self.at_start(),
+            cycle_time_s=active, cycle_elapsed_s=elapsed, last_cycle_s=self.last_cycle_s,
+            last_cycle_elapsed_s=self.last_cycle_elapsed_s, at_start=self.at_start(),
             start_configuration=cfg.start_configuration if cfg else "", message=self.message)
+
+    # ------------------------------------------------------------------------------------------- across a restart
+    def memory(self) -> dict[str, Any]:
+        """What the node saves in its state file: the next cycle's number and the last cycle's times."""
+        return {"next_cycle": self.next_cycle, "last_cycle_s": self.last_cycle_s,
+                "last_cycle_elapsed_s": self.last_cycle_elapsed_s}
+
+    def restore(self, memory: Mapping[str, Any]) -> Optional[str]:
+        """Take back a memory saved before a restart (while idle, at start); returns what is wrong with it (then
+        nothing is taken)."""
+        why = memory_problem(memory)
+        if why is not None:
+            return why
+        self.next_cycle = self.cycle = int(memory["next_cycle"])
+        self.last_cycle_s = float(memory["last_cycle_s"])
+        self.last_cycle_elapsed_s = float(memory["last_cycle_elapsed_s"])
+        return None
+
+
+def memory_problem(memory: Mapping[str, Any]) -> Optional[str]:
+    """What is wrong with a saved client memory, or None."""
+    n = memory.get("next_cycle")
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_CYCLE:
+        return f"next_cycle: expected a whole number from 1 to {MAX_CYCLE}, got {n!r}"
+    for key in ("last_cycle_s", "last_cycle_elapsed_s"):
+        if not finite_number(memory.get(key)):
+            return f"{key}: expected a number of seconds (0 or more), got {memory.get(key)!r}"
+    if memory["last_cycle_elapsed_s"] < memory["last_cycle_s"]:
+        return (f"last_cycle_elapsed_s ({memory['last_cycle_elapsed_s']!r}) is below last_cycle_s "
+                f"({memory['last_cycle_s']!r}): the time with pauses cannot be shorter")
+    return None

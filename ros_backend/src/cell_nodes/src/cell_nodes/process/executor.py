@@ -13,6 +13,8 @@ Rules:
 - Pause takes effect between steps: `pausing` until the current step ends, then `paused` with the arm held by the
   driver. A routine has no pause of its own: pausing stops it, and it runs again from its start on resume.
 - Dry run: every step is logged and shown for `dry_run_step_s`, without any robot, tool, routine or topic call.
+- Cycle times: a cycle's active time excludes the time spent `paused` (from the hold between two steps to the
+  resume); its elapsed time includes it. `pausing` is not paused time: the step is still running.
 """
 from __future__ import annotations
 
@@ -81,8 +83,19 @@ class Progress:
     cycle: int = 0
     cycles_done: int = 0
     cycle_start: float = 0.0
-    last_cycle_s: float = 0.0
+    last_cycle_s: float = 0.0           # the last completed cycle's active time (paused time excluded)
     message: str = ""
+    cycle_paused_s: float = 0.0         # paused time of the current cycle so far (pauses that ended)
+    paused_since: float = 0.0           # when the pause going on began (clock time), 0 none
+    last_cycle_elapsed_s: float = 0.0   # the last completed cycle from start to end, paused time included
+
+    def cycle_times(self, now: float) -> tuple[float, float]:
+        """(active, elapsed) seconds of the current cycle at `now`; (0, 0) without a cycle start."""
+        if not self.cycle_start:
+            return 0.0, 0.0
+        elapsed = max(0.0, now - self.cycle_start)
+        paused = self.cycle_paused_s + (max(0.0, now - self.paused_since) if self.paused_since else 0.0)
+        return max(0.0, elapsed - paused), elapsed
 
 
 @dataclass(frozen=True)
@@ -96,6 +109,7 @@ class RunResult:
     operation: int = -1
     step_index: int = -1
     step: str = ""
+    last_cycle_elapsed_s: float = 0.0
 
 
 class _Stopped(Exception):
@@ -283,6 +297,9 @@ class Executor:
             if state not in (PAUSING, PAUSED):
                 return False, "the process is not paused" if state != STOPPING else "the process is stopping"
             self._pause = False
+            if self._p.paused_since:   # the pause ends here: its time is not the cycle's active time
+                self._p.cycle_paused_s += max(0.0, self.clock.now() - self._p.paused_since)
+                self._p.paused_since = 0.0
             self._apply(state=RUNNING)
         self._emit()
         if state == PAUSING:
@@ -305,19 +322,23 @@ class Executor:
             many = "until stopped" if req.cycles == 0 else _plural(req.cycles, "cycle")
             self._log("info", f"Start: {many} of {_plural(len(ops), 'operation')} from cycle {cycle}{dry}")
         self._emit(state=RUNNING, operation=-1, step_index=-1, step_count=0, step="", cycle=cycle, cycles_done=0,
-                   cycle_start=self.clock.now(), message="running")
+                   cycle_start=self.clock.now(), cycle_paused_s=0.0, paused_since=0.0, message="running")
         try:
             while req.cycles == 0 or done < req.cycles:
                 started = self.clock.now()
-                self._emit(cycle=cycle, cycle_start=started)
+                self._emit(cycle=cycle, cycle_start=started, cycle_paused_s=0.0, paused_since=0.0)
                 for oi in ops:
                     self._run_operation(oi, cycle, req.dry_run)
                 done += 1
-                self._emit(cycles_done=done)
                 if req.operation < 0:
-                    took = self.clock.now() - started
-                    self._emit(last_cycle_s=took)
-                    self._log("info", f"Cycle {cycle} done in {took:.1f} s")
+                    # One change for the count and both times: a client saving them sees them together.
+                    with self._lock:
+                        active, elapsed = self._p.cycle_times(self.clock.now())
+                    self._emit(cycles_done=done, last_cycle_s=active, last_cycle_elapsed_s=elapsed)
+                    paused = f" ({elapsed:.1f} s with pauses)" if elapsed - active >= 0.05 else ""
+                    self._log("info", f"Cycle {cycle} done in {active:.1f} s{paused}")
+                else:
+                    self._emit(cycles_done=done)
                 cycle += 1
             if req.operation >= 0:
                 message = f"operation '{cfg.operations[req.operation].name}' done"
@@ -325,7 +346,8 @@ class Executor:
                     message += f" {_plural(done, 'time')}"
             else:
                 message = f"{_plural(done, 'cycle')} done"
-            return self._finish(RunResult(True, message, IDLE, False, done, self._p.last_cycle_s), "info",
+            return self._finish(RunResult(True, message, IDLE, False, done, self._p.last_cycle_s,
+                                          last_cycle_elapsed_s=self._p.last_cycle_elapsed_s), "info",
                                 f"Done: {message}")
         except _Stopped:
             # The interrupted step answers "stopped" as soon as the driver got the stop; the run ends (and the
@@ -336,7 +358,7 @@ class Executor:
             text = f"{'Stopped' if end_state == IDLE else 'Error'}{where}: {message}"
             p = self._p
             return self._finish(RunResult(False, message, end_state, end_state == IDLE, done, p.last_cycle_s,
-                                          p.operation, p.step_index, p.step),
+                                          p.operation, p.step_index, p.step, p.last_cycle_elapsed_s),
                                 "warning" if end_state == IDLE else "error", text)
         except _Failed as e:
             message = str(e)
@@ -346,11 +368,12 @@ class Executor:
                     self._log("warning", f"the robot driver's stop failed: {why}")
             p = self._p
             return self._finish(RunResult(False, message, ERROR, False, done, p.last_cycle_s, p.operation,
-                                          p.step_index, p.step), "error", f"Error: {message}")
+                                          p.step_index, p.step, p.last_cycle_elapsed_s), "error", f"Error: {message}")
 
     def _finish(self, result: RunResult, level: str, text: str) -> RunResult:
         self._log(level, text)
-        changes: dict[str, Any] = dict(state=result.state, message=result.message, cycles_done=result.cycles_done)
+        changes: dict[str, Any] = dict(state=result.state, message=result.message, cycles_done=result.cycles_done,
+                                       paused_since=0.0)
         if result.state != ERROR:   # an error keeps showing where it happened
             changes.update(operation=-1, step_index=-1, step_count=0, step="")
         with self._emit_lock:
@@ -392,7 +415,7 @@ class Executor:
                 raise _Stopped()
             if not self._pause:
                 return
-            self._apply(state=PAUSED)
+            self._apply(state=PAUSED, paused_since=self.clock.now())
             after = self._p.step
         self._emit()
         self._log("info", f"Paused after '{after}'; next: '{next_text}'" if after else f"Paused; next: '{next_text}'")
