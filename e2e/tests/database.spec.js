@@ -40,9 +40,10 @@ test('replace from a USB drive, then from a file picked on the phone, then resto
   await page.getByRole('radio', { name: 'parts_v2.csv' }).check();
   await expect(page.getByRole('combobox', { name: 'Database file to replace' })).toHaveValue('parts.csv');
   await page.getByRole('button', { name: 'Replace parts.csv' }).click();
-  const confirm = page.getByRole('alertdialog');
-  await expect(confirm).toContainText(`Replace parts.csv with ${drive}/exports/parts_v2.csv?`);
+  const confirm = page.getByRole('dialog', { name: `Replace parts.csv with ${drive}/exports/parts_v2.csv?` });
+  await expect(confirm.getByRole('button', { name: 'Yes, replace' })).toBeFocused();
   await confirm.getByRole('button', { name: 'Yes, replace' }).click();
+  await expect(confirm).toBeHidden();
   await expect(page.getByTestId('replace-done')).toContainText(`parts.csv replaced with ${drive}/exports/parts_v2.csv.`);
   await expect(partsMeta(page)).toContainText(`${V2.length} B`);
 
@@ -50,8 +51,9 @@ test('replace from a USB drive, then from a file picked on the phone, then resto
   await page.getByRole('radio', { name: 'File on this device' }).check();
   await page.getByLabel('File from this device').setInputFiles({ name: 'parts_v3.csv', mimeType: 'text/csv', buffer: Buffer.from(V3) });
   await page.getByRole('button', { name: 'Replace parts.csv' }).click();
-  await expect(page.getByRole('alertdialog')).toContainText('Replace parts.csv with parts_v3.csv from this device?');
-  await page.getByRole('button', { name: 'Yes, replace' }).click();
+  const upload = page.getByRole('dialog', { name: 'Replace parts.csv with parts_v3.csv from this device?' });
+  await expect(upload).toContainText('The current parts.csv is kept as a backup');
+  await upload.getByRole('button', { name: 'Yes, replace' }).click();
   const done = page.getByTestId('replace-done');
   await expect(done).toContainText('parts.csv replaced with parts_v3.csv from this device.');
   await expect(done).toContainText(/kept as the backup parts\.csv\.\d{4}-/);
@@ -62,8 +64,7 @@ test('replace from a USB drive, then from a file picked on the phone, then resto
   // Restore that backup (the drive's version): confirmed, then the file is the old one again.
   await page.getByRole('button', { name: 'Show backups of parts.csv' }).click();
   await page.getByRole('button', { name: `Restore parts.csv from ${backup}` }).click();
-  const ask = page.getByRole('alertdialog');
-  await expect(ask).toContainText(`Restore parts.csv from the backup ${backup}?`);
+  const ask = page.getByRole('dialog', { name: `Restore parts.csv from the backup ${backup}?` });
   await ask.getByRole('button', { name: 'Yes, restore' }).click();
   await expect(page.getByTestId('restore-done')).toContainText(`parts.csv restored from ${backup}.`);
   await expect(partsMeta(page)).toContainText(`${V2.length} B`);
@@ -77,8 +78,17 @@ test("a wrong extension: the server's refusal is shown as it came", async ({ pag
   await page.getByRole('radio', { name: 'readme.txt' }).check();
   await page.getByRole('combobox', { name: 'Database file to replace' }).selectOption('parts.csv');
   await expect(page.getByRole('note')).toContainText('parts.csv takes only .csv files');
-  await page.getByRole('button', { name: 'Replace parts.csv' }).click();
-  await page.getByRole('button', { name: 'Yes, replace' }).click();
+  // Escape cancels the confirmation: nothing sent, the focus back on Replace; then confirmed.
+  const replace = page.getByRole('button', { name: 'Replace parts.csv' });
+  await replace.click();
+  const confirm = page.getByRole('dialog', { name: `Replace parts.csv with ${drive}/readme.txt?` });
+  await expect(confirm.getByRole('button', { name: 'Yes, replace' })).toBeFocused();
+  await page.keyboard.press('Escape');
+  await expect(confirm).toBeHidden();
+  await expect(replace).toBeFocused();
+  await expect(page.getByTestId('replace-failed')).toHaveCount(0);
+  await replace.click();
+  await confirm.getByRole('button', { name: 'Yes, replace' }).click();
   await expect(page.getByTestId('replace-failed')).toContainText('Could not replace parts.csv: parts.csv needs a .csv file, not .txt');
 });
 

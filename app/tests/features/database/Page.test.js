@@ -66,15 +66,28 @@ describe('Database page', () => {
     render(DatabasePage, { feature, section });
     await fireEvent.click(await screen.findByRole('radio', { name: 'parts_v2.csv' }));
     const replaceBtn = screen.getByRole('button', { name: 'Replace parts.csv' });
+    replaceBtn.focus();
     await fireEvent.click(replaceBtn);
-    const dialog = screen.getByRole('alertdialog');
-    expect(dialog.textContent).toContain('Replace parts.csv with /media/usb1/parts_v2.csv?');
-    // Cancel: nothing sent.
+    // The shared modal confirmation: named by its question, described by what becomes of the current file.
+    const dialog = screen.getByRole('dialog', { name: 'Replace parts.csv with /media/usb1/parts_v2.csv?' });
+    expect(dialog.getAttribute('aria-describedby')).toBeTruthy();
+    expect(within(dialog).getByText('The current parts.csv is kept as a backup, which can be restored.')).toBeTruthy();
+    expect(document.activeElement).toBe(within(dialog).getByRole('button', { name: 'Yes, replace' }));
+    // Cancel: nothing sent, the dialog is gone, the focus is back on Replace.
     await fireEvent.click(within(dialog).getByRole('button', { name: 'Cancel' }));
+    expect(screen.queryByRole('dialog')).toBeNull();
+    expect(document.activeElement).toBe(replaceBtn);
     expect(calls.some((c) => c.method === 'POST')).toBe(false);
-    await fireEvent.click(screen.getByRole('button', { name: 'Replace parts.csv' }));
+    // Escape (the dialog's cancel event) cancels too.
+    await fireEvent.click(replaceBtn);
+    await fireEvent(screen.getByRole('dialog', { name: /^Replace parts\.csv with / }), new Event('cancel', { cancelable: true }));
+    expect(screen.queryByRole('dialog')).toBeNull();
+    expect(document.activeElement).toBe(replaceBtn);
+    expect(calls.some((c) => c.method === 'POST')).toBe(false);
+    await fireEvent.click(replaceBtn);
     expect(document.activeElement?.textContent).toBe('Yes, replace');
     await fireEvent.click(screen.getByRole('button', { name: 'Yes, replace' }));
+    expect(screen.queryByRole('dialog')).toBeNull();
     const done = await screen.findByTestId('replace-done');
     expect(done.textContent).toContain('parts.csv replaced with /media/usb1/parts_v2.csv');
     expect(done.textContent).toContain('parts.csv.2026-11-22T10:00:00.000Z');
@@ -90,7 +103,7 @@ describe('Database page', () => {
     await fireEvent.change(screen.getByRole('combobox', { name: 'Database file to replace' }), { target: { value: 'parts.csv' } });
     expect(screen.getByRole('note').textContent).toContain('parts.csv takes only .csv files');
     await fireEvent.click(screen.getByRole('button', { name: 'Replace parts.csv' }));
-    expect(screen.getByRole('alertdialog').textContent).toContain('Replace parts.csv with /media/usb1/notes.txt?');
+    expect(screen.getByRole('dialog', { name: 'Replace parts.csv with /media/usb1/notes.txt?' })).toBeTruthy();
     await fireEvent.click(screen.getByRole('button', { name: 'Yes, replace' }));
     const alert = await screen.findByTestId('replace-failed');
     expect(alert.textContent).toContain('Could not replace parts.csv: parts.csv needs a .csv file, not .txt');
@@ -103,8 +116,9 @@ describe('Database page', () => {
     await fireEvent.click(await screen.findByRole('button', { name: 'Show backups of parts.csv' }));
     const restore = await screen.findByRole('button', { name: `Restore parts.csv from ${backup}` });
     await fireEvent.click(restore);
-    expect(screen.getByRole('alertdialog').textContent).toContain(`Restore parts.csv from the backup ${backup}?`);
-    await fireEvent.click(screen.getByRole('button', { name: 'Yes, restore' }));
+    const ask = screen.getByRole('dialog', { name: `Restore parts.csv from the backup ${backup}?` });
+    expect(ask.textContent).toContain('The current parts.csv is kept as a backup');
+    await fireEvent.click(within(ask).getByRole('button', { name: 'Yes, restore' }));
     expect((await screen.findByTestId('restore-done')).textContent).toContain(`parts.csv restored from ${backup}`);
     expect(calls.find((c) => c.url.endsWith('/restore'))?.body).toEqual({ backup });
     expect(screen.getByRole('button', { name: 'Hide backups of parts.csv' }).getAttribute('aria-expanded')).toBe('true');
@@ -135,7 +149,8 @@ describe('Database page', () => {
     await fireEvent.change(input, { target: { files: [file] } });
     expect(/** @type {HTMLSelectElement} */ (screen.getByRole('combobox', { name: 'Database file to replace' })).value).toBe('fixtures.yaml');
     await fireEvent.click(screen.getByRole('button', { name: 'Replace fixtures.yaml' }));
-    expect(screen.getByRole('alertdialog').textContent).toContain('Replace fixtures.yaml with fixtures_v3.yaml from this device?');
+    const ask = screen.getByRole('dialog', { name: 'Replace fixtures.yaml with fixtures_v3.yaml from this device?' });
+    expect(ask.textContent).toContain('There is no fixtures.yaml on the robot PC yet, so there is nothing to back up.');
     await fireEvent.click(screen.getByRole('button', { name: 'Yes, replace' }));
     await vi.waitFor(() => expect(xhr).toBeTruthy());
     xhr.upload.onprogress({ loaded: 5, total: 10, lengthComputable: true });

@@ -1,6 +1,6 @@
 import { describe, it, expect, vi } from 'vitest';
 import {
-  step, IDLE, question, doneText, failText, extOf, defaultTarget, extensionWarning, acceptFor, joinPath, parentPath, childPath,
+  step, IDLE, question, confirmNote, doneText, failText, extOf, defaultTarget, extensionWarning, acceptFor, joinPath, parentPath, childPath,
   formatBytes, backupTime, percent, uploadFile,
 } from '../../../src/lib/features/database/logic.js';
 
@@ -35,6 +35,8 @@ describe('the replace / restore flow', () => {
     expect(failText('restore', 'parts.csv', 'nope')).toBe('Could not restore parts.csv: nope');
     expect(doneText('restore', 'parts.csv', 'b1', { file: /** @type {any} */ ({}), backup: null })).toBe('parts.csv restored from b1. There was no earlier file to back up.');
     expect(question('replace', 'a.csv', 'b.csv from this device')).toBe('Replace a.csv with b.csv from this device?');
+    expect(confirmNote('a.csv', true)).toBe('The current a.csv is kept as a backup, which can be restored.');
+    expect(confirmNote('a.csv', false)).toBe('There is no a.csv on the robot PC yet, so there is nothing to back up.');
   });
 });
 

@@ -133,6 +133,17 @@ export function question(kind, target, source) {
   return kind === 'replace' ? `Replace ${target} with ${source}?` : `Restore ${target} from the backup ${source}?`;
 }
 
+/**
+ * What the confirmation adds below its question: what happens to the current file (the BFF backs it up before a
+ * replace or a restore, when there is one).
+ * @param {string} target @param {boolean} exists
+ */
+export function confirmNote(target, exists) {
+  return exists
+    ? `The current ${target} is kept as a backup, which can be restored.`
+    : `There is no ${target} on the robot PC yet, so there is nothing to back up.`;
+}
+
 /** @param {'replace' | 'restore'} kind @param {string} target @param {string} source @param {Replaced | undefined} r */
 export function doneText(kind, target, source, r) {
   const kept = r?.backup ? ` The file it replaced was kept as the backup ${r.backup}.` : ' There was no earlier file to back up.';
