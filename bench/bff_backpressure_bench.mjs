@@ -11,6 +11,8 @@
 //   fast   25 clients at 100 Hz, alone and beside one stalled image client: p95 and loss.
 // Options: --cases slow,stall,fast  --slow-s 60  --stall-s 300  --fast-s 20  --bff-dir <dir with src/server.js>
 //   (--bff-dir lets the same cases run against another copy of bff/, e.g. the relay before the fix).
+//   BENCH_QUICK=1 (npm run bench -- --quick): defaults --slow-s 10 --stall-s 10 --fast-s 2, 2 s of reading before
+//   the stall (5 s), the fast pair once (twice); options still win.
 import { spawn, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import http from 'node:http';
@@ -27,6 +29,7 @@ const args = process.argv.slice(2);
 const opt = (name, dflt) => { const i = args.indexOf(`--${name}`); return i >= 0 ? args[i + 1] : dflt; };
 const now = () => performance.timeOrigin + performance.now();
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+const QUICK = process.env.BENCH_QUICK === '1';
 const pct = (xs, p) => { const s = [...xs].sort((a, b) => a - b); return s.length ? s[Math.min(s.length - 1, Math.floor((p / 100) * s.length))] : NaN; };
 const rssMb = (pid) => { try { return Number(/VmRSS:\s+(\d+)/.exec(fs.readFileSync(`/proc/${pid}/status`, 'utf8'))[1]) / 1024; } catch { return NaN; } };
 const IMAGE = '/cell/bench/image';
@@ -92,7 +95,7 @@ async function main() {
   const cleanups = [() => up.kill('SIGTERM')];
   const cleanup = () => { while (cleanups.length) { try { /** @type {() => void} */ (cleanups.pop())(); } catch { /* best effort */ } } };
   process.on('SIGINT', () => { cleanup(); process.exit(130); });
-  console.log(`BFF back-pressure bench (${new Date().toISOString().slice(0, 10)}, ${os.cpus().length} cores, load ${os.loadavg()[0].toFixed(1)}), BFF from ${path.relative(ROOT, bffDir) || bffDir}`);
+  console.log(`BFF back-pressure bench (${new Date().toISOString().slice(0, 10)}, ${os.cpus().length} cores, load ${os.loadavg()[0].toFixed(1)})${QUICK ? ', quick' : ''}, BFF from ${path.relative(ROOT, bffDir) || bffDir}`);
   try {
     await sleep(300);
     if (cases.includes('slow')) await slowCase(bffDir, base, cleanups);
@@ -164,7 +167,7 @@ function haveTools() {
 }
 
 async function slowCase(bffDir, base, cleanups) {
-  const secs = Number(opt('slow-s', 60));
+  const secs = Number(opt('slow-s', QUICK ? 10 : 60));
   console.log(`\n== slow link: 0.5 MB/s veth in a namespace of its own, 30 Hz x 30 KB frames, ${secs} s ==`);
   const why = haveTools();
   if (why) { console.log(`skipped: ${why}`); return; }
@@ -208,14 +211,14 @@ async function slowCase(bffDir, base, cleanups) {
 }
 
 async function stallCase(bffDir, base) {
-  const secs = Number(opt('stall-s', 300));
+  const secs = Number(opt('stall-s', QUICK ? 10 : 300));
   console.log(`\n== stalled reader: 30 Hz x 30 KB frames, client stops reading for ${secs} s (loopback) ==`);
   const bff = await startBff(bffDir, base, '127.0.0.1');
   try {
     /** @type {{at: number, stamp: number}[]} */
     const got = [];
     const ws = await openClient(bff.wsUrl, bff.cookie, imageSub, (d) => { const m = cborDecode(d); if (m.op === 'publish') got.push({ at: now(), stamp: stampMs(m) }); });
-    await sleep(5000);
+    await sleep(QUICK ? 2000 : 5000);
     const rss0 = rssMb(bff.pid);
     let rssMax = rss0;
     /** @type {any} */ (ws)._socket.pause();
@@ -240,12 +243,12 @@ async function stallCase(bffDir, base) {
 }
 
 async function fastCase(bffDir, base) {
-  const secs = Number(opt('fast-s', 20));
+  const secs = Number(opt('fast-s', QUICK ? 2 : 20));
   console.log(`\n== 25 clients x 100 Hz Float64MultiArray(6) JSON, ${secs} s, alone and beside one stalled image client (loopback) ==`);
   console.log('run | msgs/s/client | lost | p50 ms | p95 ms | BFF RSS MB');
   const bff = await startBff(bffDir, base, '127.0.0.1');
   try {
-    for (const withSlow of [false, true, false, true]) {
+    for (const withSlow of QUICK ? [false, true] : [false, true, false, true]) {
       let slow;
       if (withSlow) {
         slow = await openClient(bff.wsUrl, bff.cookie, imageSub, () => {});

@@ -7,10 +7,14 @@ import fs from 'node:fs';
 import { WebSocket } from 'ws';
 import { stackEnv, addUser, startStack, stopStack, REPO_ROOT } from '../e2e/lib/stack.js';
 
-const DURATION_S = Number(process.env.BENCH_DURATION_S || 5);
+const QUICK = process.env.BENCH_QUICK === '1'; // npm run bench -- --quick: 1.5 s per scenario
+const DURATION_S = Number(process.env.BENCH_DURATION_S || (QUICK ? 1.5 : 5));
 const port = 38080;
-const env = stackEnv({ port, masterPort: port + 1, rosbridgePort: port + 2, extraEnv: { UR_SIM: '0' } });
-addUser(env, 'bench', 'operator', 'bench-password');
+// UR_HOST: an address no controller listens on (stackEnv's default, 127.0.0.9, is where e2e stacks run their sim).
+const env = stackEnv({ port, masterPort: port + 1, rosbridgePort: port + 2, urHost: '127.0.0.27', extraEnv: { UR_SIM: '0' } });
+// admin: the only role granted the bench's own topic (an operator gets what its pages use; /cell/bench was refused
+// and the bench measured nothing). The op guard checks every op the same way for every role.
+addUser(env, 'bench', 'admin', 'bench-password');
 
 const PUBLISHER = `
 import time, rospy
@@ -57,7 +61,7 @@ try {
   const login = await fetch(`http://127.0.0.1:${port}/api/auth/login`, { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ username: 'bench', password: 'bench-password' }) });
   const cookie = login.headers.get('set-cookie').split(';')[0];
   const bffPid = Number(fs.readdirSync('/proc').find((d) => /^\d+$/.test(d) && (() => { try { return fs.readFileSync(`/proc/${d}/cmdline`, 'utf8').includes('bff/src/server.js') && fs.readFileSync(`/proc/${d}/environ`, 'utf8').includes(env.DATA_DIR); } catch { return false; } })()));
-  console.log(`BFF relay path, 100 Hz Float64MultiArray(6), JSON, ${DURATION_S} s per scenario (latency includes rosbridge)`);
+  console.log(`BFF relay path, 100 Hz Float64MultiArray(6), JSON, ${DURATION_S} s per scenario${QUICK ? ' (quick)' : ''} (latency includes rosbridge)`);
   console.log('clients | msgs/s/client | p50 ms | p95 ms | BFF CPU % | BFF RSS MB');
   for (const n of [1, 10, 25]) {
     const r = await scenario(cookie, bffPid, n);

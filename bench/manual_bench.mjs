@@ -14,7 +14,8 @@ import readline from 'node:readline';
 import { chromium, devices } from '@playwright/test';
 import { stackEnv, addUser, startStack, stopStack, REPO_ROOT } from '../e2e/lib/stack.js';
 
-const REPS = Number(process.env.BENCH_REPS || 5);
+const QUICK = process.env.BENCH_QUICK === '1'; // npm run bench -- --quick: 3 runs each
+const REPS = Number(process.env.BENCH_REPS || (QUICK ? 3 : 5));
 const cellFile = path.resolve(REPO_ROOT, process.env.BENCH_CELL || 'config/demo-cell.yaml');
 const cell = /** @type {any} */ (yaml.load(fs.readFileSync(cellFile, 'utf8')));
 const rosControl = cell.manual.groups[0].driver === 'ros_control';
@@ -62,6 +63,10 @@ try {
   await page.goto('/manual');
   await page.getByRole('button', { name: 'Take control' }).click();
   await page.getByTestId('lease-holder').filter({ hasText: 'You have control' }).waitFor();
+  // The driver's groups and limits come by a service call: until they are in, a jog button does nothing, and their
+  // arrival sets the speed slider to the driver's default. On a loaded machine they can come after the slider is set.
+  await page.getByTestId('manual-setup').waitFor({ state: 'detached', timeout: 30_000 });
+  await page.getByTestId('manual-gate').filter({ hasText: 'Motion controls ready' }).waitFor({ timeout: 30_000 });
   await firstSample(() => true, 0, 20_000);
 
   /** Set a range input to its maximum the way a keyboard user would (End), so the page's own input handler runs. */
@@ -120,8 +125,8 @@ try {
     await page.mouse.up();
   }
   console.log(rosControl
-    ? `Hold-to-run jogging on ${cell.cell.name}, ros_control backend (phone profile, ${REPS} runs each; the arm driver's joint states at 200 Hz)`
-    : `Hold-to-run jogging on the simulated UR5 (phone profile, ${REPS} runs each; controller state at 500 Hz)`);
+    ? `Hold-to-run jogging on ${cell.cell.name}, ros_control backend (phone profile, ${REPS} runs each${QUICK ? ', quick' : ''}; the arm driver's joint states at 200 Hz)`
+    : `Hold-to-run jogging on the simulated UR5 (phone profile, ${REPS} runs each${QUICK ? ', quick' : ''}; controller state at 500 Hz)`);
   console.log(`  Cartesian jog, release -> decelerating:  ${fmt(decel)}   (target <= 100 ms)`);
   console.log(`  Cartesian jog, release -> standstill:    ${fmt(still)}   (target <= 300 ms)`);
   console.log(`  joint jog, release -> standstill:        ${fmt(jointStill)}   (target <= 300 ms)`);

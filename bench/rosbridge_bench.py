@@ -8,6 +8,7 @@ Latency = receipt time at the client minus the publish time carried in the messa
 Server RSS (max) and CPU (% of one core) are sampled from /proc during each scenario.
 
 Run: cd /work/main && source scripts/ros-env.sh && python bench/rosbridge_bench.py [--duration 5]
+BENCH_QUICK=1 (npm run bench -- --quick) makes the default 1.5 s per scenario.
 It starts its own roscore and rosbridge_server on free loopback ports and stops both at the end.
 """
 from __future__ import annotations
@@ -205,7 +206,9 @@ def run_scenario(name: str, port: int, server_pid: int, n_clients: int, rate: fl
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--duration", type=float, default=5.0, help="measured seconds per scenario")
+    quick = os.environ.get("BENCH_QUICK") == "1"
+    ap.add_argument("--duration", type=float, default=1.5 if quick else 5.0,
+                    help="measured seconds per scenario (5; 1.5 with BENCH_QUICK=1)")
     args = ap.parse_args()
 
     master_port, port = free_port(), free_port()
@@ -228,7 +231,7 @@ def main() -> int:
         import rospy
         rospy.init_node("rosbridge_bench", anonymous=True, disable_signals=True)
         jpeg = make_jpeg()
-        print(f"rosbridge bench: loopback, {os.cpu_count()} cores, {args.duration:.0f} s per scenario, "
+        print(f"rosbridge bench: loopback, {os.cpu_count()} cores, {args.duration:g} s per scenario{' (quick)' if quick else ''}, "
               f"JPEG {len(jpeg) / 1024:.0f} KB", flush=True)
         scenarios = [
             ("array100Hz-json", 1, 100.0, "array", "none"),

@@ -11,9 +11,11 @@ import { spawn } from 'node:child_process';
 import { chromium, devices } from '@playwright/test';
 import { stackEnv, addUser, startStack, stopStack, REPO_ROOT } from '../e2e/lib/stack.js';
 
-const SECONDS = Number(process.env.BENCH_DURATION_S || 10);
+const QUICK = process.env.BENCH_QUICK === '1'; // npm run bench -- --quick: 3 s per run (the window still fills first)
+const SECONDS = Number(process.env.BENCH_DURATION_S || (QUICK ? 3 : 10));
 const port = 38480;
-const env = stackEnv({ port, masterPort: port + 1, rosbridgePort: port + 2, extraEnv: { UR_SIM: '0' } });
+// UR_HOST: an address no controller listens on (stackEnv's default, 127.0.0.9, is where e2e stacks run their sim).
+const env = stackEnv({ port, masterPort: port + 1, rosbridgePort: port + 2, urHost: '127.0.0.28', extraEnv: { UR_SIM: '0' } });
 addUser(env, 'bench', 'operator', 'bench-password');
 
 const PUBLISHER = `
@@ -92,7 +94,7 @@ try {
       drawMs,
     };
   };
-  console.log(`Sensors page, phone profile (Pixel 7), one time-series of 6 fields published at 100 Hz, ${SECONDS} s per run`);
+  console.log(`Sensors page, phone profile (Pixel 7), one time-series of 6 fields published at 100 Hz, ${SECONDS} s per run${QUICK ? ' (quick)' : ''}`);
   console.log(`  plot ${plotWidth} CSS px wide, 10 s window; the page asked rosbridge for throttle_rate ${throttle} ms`);
   console.log('  CPU         | fps  | frame p95 ms | frame max ms | frames > 50 ms | chart draws/s | draw ms (decimate + update) | msgs/s received');
   const pause = page.getByRole('button', { name: /^(Pause|Resume) Wrist wrench$/ });
