@@ -15,8 +15,10 @@ let bff;
 let tls;
 const tlsOpts = { dataDir: env.dataDir, userCert: env.tlsCert || undefined, userKey: env.tlsKey || undefined };
 try {
-  bff = await createBff(env, { log });
+  // The certificates first: a control lease carried over a restart gets its fresh heartbeat window in createBff,
+  // which must be the last slow step before listening.
   tls = ensureCertificates(tlsOpts);
+  bff = await createBff(env, { log });
 } catch (e) {
   if (e instanceof CellConfigError || e instanceof StartupError || e?.name === 'TlsError') {
     console.error(e.message);
@@ -45,7 +47,7 @@ const onUpgrade = (req, socket, head) => {
 };
 server.on('upgrade', onUpgrade);
 secure.on('upgrade', onUpgrade);
-server.listen(env.port, env.host, () => log(`listening on http://${env.host}:${env.port}`));
+server.listen(env.port, env.host, () => log(`listening on http://${env.host}:${env.port} (started in ${process.uptime().toFixed(2)} s)`));
 secure.listen(env.tlsPort, env.host, () => log(`listening on https://${env.host}:${env.tlsPort} (trust page: /trust, CA: /ca.crt)`));
 if (tls.source === 'generated') {
   setInterval(() => {

@@ -65,6 +65,9 @@ test('local CA and server certificate: chain, SANs, key modes, reuse, regenerati
   const c2 = new crypto.X509Certificate(c.cert);
   assert.ok(c2.checkIssued(ca) && c2.verify(ca.publicKey));
   assert.ok(c2.subjectAltName.includes('IP Address:192.0.2.11') && !c2.subjectAltName.includes('192.0.2.10'));
+  // A new key takes seconds on a busy robot PC (a restarted BFF must be back within the lease's timeout): kept.
+  assert.equal(c.key, a.key, 'new address: the server key is kept, certified again');
+  assert.ok(c2.checkPrivateKey(crypto.createPrivateKey(c.key)));
 
   // Near expiry: a start 380 days later renews the server certificate, CA kept.
   const later = new Date(Date.now() + 380 * 86400000);

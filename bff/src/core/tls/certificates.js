@@ -57,7 +57,9 @@ export function ensureCertificates({ dataDir, hostnames, addresses, userCert, us
   }
   let server = renewed ? null : readServer(files, ca, names, now);
   if (!server) {
-    server = createServerCert(ca, names, now);
+    // A new address (a network came up) needs a new certificate, not a new key: an RSA key takes seconds to make on
+    // a busy robot PC, and a restarted BFF must be back within the control lease's heartbeat timeout.
+    server = createServerCert(ca, names, now, renewed ? null : readKey(files.key));
     writeFileAtomic(files.key, server.keyPem, 0o600);
     writeFileAtomic(files.cert, server.certPem, 0o644);
     writeFileAtomic(files.meta, JSON.stringify({ names, issued: now.toISOString() }, null, 2) + '\n', 0o644);
@@ -180,9 +182,27 @@ function createCa(now) {
   return { keyPem, key, cert, certPem: forge.pki.certificateToPem(cert) };
 }
 
-function createServerCert(ca, names, now) {
-  const { keyPem, key, publicKey } = newKeyPair();
-  void key;
+/** The PEM of a private key file, or null when there is none or it is not a key. @param {string} file */
+function readKey(file) {
+  try {
+    const pem = fs.readFileSync(file, 'utf8');
+    crypto.createPrivateKey(pem);
+    return pem;
+  } catch {
+    return null;
+  }
+}
+
+/** @param {string | null} [reuseKeyPem] an existing server key to certify again (new names), else a new one */
+function createServerCert(ca, names, now, reuseKeyPem = null) {
+  let keyPem, publicKey;
+  if (reuseKeyPem) {
+    const key = forge.pki.privateKeyFromPem(reuseKeyPem);
+    keyPem = reuseKeyPem;
+    publicKey = forge.pki.setRsaPublicKey(key.n, key.e);
+  } else {
+    ({ keyPem, publicKey } = newKeyPair());
+  }
   const cert = forge.pki.createCertificate();
   cert.publicKey = publicKey;
   cert.serialNumber = serialNumber();
