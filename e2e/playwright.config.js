@@ -11,20 +11,17 @@ const chromium = {
   },
 };
 
-// The demo cell's main paths (the shell, access rules, manual motion, the process) run on all three profiles.
-// The other specs drive /ros directly, change files on the robot PC, check subscriptions with rostopic, kill a
-// process of the stack or use two sessions in one browser: once, on the phone (they share one stack and its robot).
-const PHONE_ONLY = /(manual-lease|modules|alarms|routines|parameters|sensors|video|database|audit|recovery)\.spec/;
+// Every spec runs on all three profiles, one after the other against one stack: a spec leaves the cell as it found
+// it (or as its next run expects), since the tablet and desktop runs come after the phone's.
 
 export default defineConfig({
   testDir: './tests',
   // The tests share one stack whose ROS state (mode, rosbridge process) they change: one at a time.
   workers: 1,
   fullyParallel: false,
-  // One retry: a test that fails once and passes on its retry is reported as flaky (by name, with its first error
-  // and page snapshot) without failing the run; one that fails twice fails it. The stack is real processes on
-  // 2 busy cores in CI, and a rare stall there must not cost a 25-minute run, nor go unreported.
-  retries: 1,
+  // No retries: a test that fails once is a defect to find, not to hide (the failure-context reporter prints its
+  // page snapshot and last steps, as CI keeps only the console).
+  retries: 0,
   timeout: 60_000,
   expect: { timeout: 15_000 },
   reporter: [['list'], ['./lib/failure-context-reporter.js']],
@@ -40,10 +37,8 @@ export default defineConfig({
     screenshot: 'only-on-failure',
   },
   projects: [
-    // The access checks drive /ros directly, and the hold-to-run pad is a thumb control: once, on the phone.
-    // The wide layouts' own checks (the camera beside the controls) run on tablet and desktop.
-    { name: 'phone', use: { ...devices['Pixel 7'], ...chromium }, testIgnore: /\.wide\.spec/ },
-    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium }, testIgnore: PHONE_ONLY },
-    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium }, testIgnore: PHONE_ONLY },
+    { name: 'phone', use: { ...devices['Pixel 7'], ...chromium } },
+    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium } },
+    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium } },
   ],
 });

@@ -13,12 +13,15 @@ const env = readEnv();
 const log = (m) => console.log(`[bff] ${m}`);
 let bff;
 let tls;
+let phases = '';
 const tlsOpts = { dataDir: env.dataDir, userCert: env.tlsCert || undefined, userKey: env.tlsKey || undefined };
 try {
-  // The certificates first: a control lease carried over a restart gets its fresh heartbeat window in createBff,
-  // which must be the last slow step before listening.
+  // (The phases are logged with the start time: a restarted BFF must be back quickly for a lease holder.)
+  const t0 = process.uptime();
   tls = ensureCertificates(tlsOpts);
+  const t1 = process.uptime();
   bff = await createBff(env, { log });
+  phases = `modules ${t0.toFixed(2)} s, certificates ${(t1 - t0).toFixed(2)} s, the rest ${(process.uptime() - t1).toFixed(2)} s`;
 } catch (e) {
   if (e instanceof CellConfigError || e instanceof StartupError || e?.name === 'TlsError') {
     console.error(e.message);
@@ -47,7 +50,10 @@ const onUpgrade = (req, socket, head) => {
 };
 server.on('upgrade', onUpgrade);
 secure.on('upgrade', onUpgrade);
-server.listen(env.port, env.host, () => log(`listening on http://${env.host}:${env.port} (started in ${process.uptime().toFixed(2)} s)`));
+server.listen(env.port, env.host, () => {
+  bff.lease.listening();
+  log(`listening on http://${env.host}:${env.port} (started in ${process.uptime().toFixed(2)} s: ${phases})`);
+});
 secure.listen(env.tlsPort, env.host, () => log(`listening on https://${env.host}:${env.tlsPort} (trust page: /trust, CA: /ca.crt)`));
 if (tls.source === 'generated') {
   setInterval(() => {

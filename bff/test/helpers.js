@@ -23,6 +23,7 @@ export async function startBff(extraEnv = {}, opts = {}) {
   const server = http.createServer(bff.app);
   server.on('upgrade', (req, socket, head) => bff.relay.handleUpgrade(req, socket, head));
   await new Promise((r) => server.listen(0, '127.0.0.1', r));
+  bff.lease.listening();
   const base = `http://127.0.0.1:${server.address().port}`;
   const passwords = Object.fromEntries((bff.initial?.users ?? []).map((u) => [u.username, u.password]));
   return {

@@ -26,8 +26,11 @@ test('lease: every change is persisted; a new lease resumes within the timeout, 
   assert.equal(back.resume(saved.at(-1), 3400), 'resumed');
   assert.ok(back.isHolder(op));
   assert.deepEqual(back.describe(), { username: 'op1', role: 'operator', since: new Date(1000).toISOString(), resumed_at: new Date(4900).toISOString() });
-  now = 6800;
-  assert.ok(back.heartbeat(op), 'a full timeout from the resume for the next heartbeat');
+  now = 7000; // the rest of the start-up took 2.1 s more
+  back.listening();
+  assert.equal(back.describe()?.resumed_at, new Date(7000).toISOString());
+  now = 8900;
+  assert.ok(back.heartbeat(op), 'a full timeout from listening for the next heartbeat');
 
   now = 3501; // started 2.001 s after the last heartbeat
   const late = new ControlLease({ timeoutMs: 2000, now: () => now, persist: (s) => saved.push(s), onChange: (e) => events.push(e) });

@@ -50,6 +50,19 @@ export class ControlLease {
     return 'lapsed';
   }
 
+  /**
+   * The BFF now hears heartbeats (it listens): a resumed holder's timeout starts now, however long the rest of the
+   * start-up took after resume().
+   */
+  listening() {
+    if (this.holder?.resumedAt !== undefined) {
+      const t = this.now();
+      this.holder.beat = t;
+      this.holder.resumedAt = t;
+      this.#save();
+    }
+  }
+
   /** The current holder, after expiring a silent one. */
   current() {
     if (this.holder && this.now() - this.holder.beat > this.timeoutMs) {
