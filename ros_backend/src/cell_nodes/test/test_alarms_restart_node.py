@@ -7,9 +7,6 @@ from __future__ import annotations
 
 import json
 import os
-import signal
-import subprocess
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -20,6 +17,7 @@ import rospy
 import yaml
 
 from conftest import wait_for
+from nodes_helpers import Node, Nodes, client_node
 
 ROOT = Path(__file__).resolve().parents[4]
 FAULTS = "/alarms_restart_test/faults"
@@ -33,49 +31,6 @@ class Latest:
 
     def _cb(self, msg: Any) -> None:
         self.msg = msg
-
-
-class Node:
-    """One rosrun'd node with its output in a log file."""
-
-    def __init__(self, env: dict[str, str], *args: str) -> None:
-        self.log = tempfile.NamedTemporaryFile("w+", prefix=f"{TAG}-", suffix=".log", delete=False)
-        self.proc = subprocess.Popen(["rosrun", "cell_nodes", *args], stdout=self.log, stderr=subprocess.STDOUT,
-                                     env=env, start_new_session=True)
-
-    def output(self) -> str:
-        return Path(self.log.name).read_text()
-
-    def alive(self) -> bool:
-        if self.proc.poll() is not None:
-            raise AssertionError(f"the node exited ({self.proc.returncode}):\n{self.output()[-3000:]}")
-        return True
-
-    def kill(self) -> None:
-        """SIGKILL, as a crash: nothing the node would do on shutdown happens."""
-        if self.proc.poll() is None:
-            os.killpg(self.proc.pid, signal.SIGKILL)
-        self.proc.wait(5)
-
-    def stop(self) -> str:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.proc.pid, signal.SIGKILL)
-                self.proc.wait(5)
-        text = self.output()
-        os.unlink(self.log.name)
-        return text
-
-
-def _service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
 
 
 class Sources:
@@ -118,32 +73,33 @@ def cell(roscore: str, tmp_path_factory) -> Iterator[dict]:
     path = base / "cell.yaml"
     path.write_text(yaml.safe_dump(doc))
     data_dir = base / "data"
-    env = dict(os.environ, ROS_MASTER_URI=roscore, DATA_DIR=str(data_dir), PYTHONUNBUFFERED="1")
+    env = dict(os.environ, DATA_DIR=str(data_dir), PYTHONUNBUFFERED="1")
     env.pop("CELL_CONFIG", None)
-    if not rospy.core.is_initialized():
-        rospy.init_node(f"{TAG}_client", anonymous=True, disable_signals=True)
-    mode_node = Node(env, "operation_mode_node", f"_cell_config:={path}", f"__name:={TAG}_mode")
+    client_node(f"{TAG}_client")
+    mode = Nodes()
+    mode_node = mode.run("operation_mode", "operation_mode_node", f"_cell_config:={path}", f"__name:={TAG}_mode",
+                         env=env)
     sources = Sources()
     nodes: dict[str, Optional[Node]] = {"alarms": None}
 
     def start() -> Node:
-        node = Node(env, "alarms_node", f"_cell_config:={path}", f"__name:={TAG}_alarms")
-        nodes["alarms"] = node
-        wait_for(lambda: node.alive() and _service_up("/cell/alarms/reset"), 30, what="the alarms node's service")
+        alarms = Nodes()
+        node = nodes["alarms"] = alarms.run("alarms", "alarms_node", f"_cell_config:={path}", f"__name:={TAG}_alarms",
+                                            env=env)
+        alarms.wait_ready("/cell/alarms/reset", what="the alarms node's service")
         return node
 
     try:
-        wait_for(lambda: mode_node.alive() and _service_up("/cell/set_mode"), 30, what="the operation-mode node")
+        mode.wait_ready("/cell/set_mode", what="the operation-mode node")
         yield {"start": start, "sources": sources, "state_file": data_dir / "state" / "alarms.json", "nodes": nodes}
     finally:
         sources.close()
-        outputs = {}
-        if nodes["alarms"] is not None:
-            outputs["alarms"] = nodes["alarms"].stop()
-        outputs["mode"] = mode_node.stop()
-        for name, text in outputs.items():
-            print(f"\n{name} log:\n{text[-3000:]}")
-            assert "Traceback" not in text, f"{name}:\n{text[-3000:]}"
+        ends = [n for n in (nodes["alarms"], mode_node) if n is not None]
+        for node in ends:   # one after the other, the alarms node first
+            node.stop()
+        for node in ends:
+            print(f"\n{node.label} log:\n{node.tail()}")
+            node.check()
 
 
 def test_the_mode_an_alarm_replaced_is_given_back_after_the_alarms_node_restarted(cell: dict) -> None:

@@ -8,9 +8,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import signal
-import subprocess
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -21,6 +18,7 @@ import rospy
 import yaml
 
 from conftest import wait_for
+from nodes_helpers import Node, Nodes, client_node
 
 ROOT = Path(__file__).resolve().parents[4]
 TAG = "process_restart_test"
@@ -40,54 +38,6 @@ class Latest:
             self.msgs.append(msg)
 
 
-class Node:
-    """One rosrun'd node with its output in a log file."""
-
-    def __init__(self, env: dict[str, str], *args: str) -> None:
-        self.log = tempfile.NamedTemporaryFile("w+", prefix=f"{TAG}-", suffix=".log", delete=False)
-        self.proc = subprocess.Popen(["rosrun", "cell_nodes", *args], stdout=self.log, stderr=subprocess.STDOUT,
-                                     env=env, start_new_session=True)
-
-    def output(self) -> str:
-        return Path(self.log.name).read_text()
-
-    def alive(self) -> bool:
-        if self.proc.poll() is not None:
-            raise AssertionError(f"the node exited ({self.proc.returncode}):\n{self.output()[-3000:]}")
-        return True
-
-    def kill(self) -> str:
-        """SIGKILL, as a power cut: nothing the node would do on shutdown happens."""
-        if self.proc.poll() is None:
-            os.killpg(self.proc.pid, signal.SIGKILL)
-        self.proc.wait(5)
-        return self._close()
-
-    def stop(self) -> str:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.proc.pid, signal.SIGKILL)
-                self.proc.wait(5)
-        return self._close()
-
-    def _close(self) -> str:
-        text = self.output()
-        os.unlink(self.log.name)
-        assert "Traceback" not in text, text[-3000:]
-        return text
-
-
-def _service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
-
-
 @pytest.fixture(scope="module")
 def cell(roscore: str, tmp_path_factory) -> Iterator[dict]:
     doc = yaml.safe_load((ROOT / "config" / "demo-cell.yaml").read_text())
@@ -96,39 +46,47 @@ def cell(roscore: str, tmp_path_factory) -> Iterator[dict]:
     path = base / "cell.yaml"
     path.write_text(yaml.safe_dump(doc))
     data_dir = base / "data"
-    env = dict(os.environ, ROS_MASTER_URI=roscore, DATA_DIR=str(data_dir), PYTHONUNBUFFERED="1")
+    env = dict(os.environ, DATA_DIR=str(data_dir), PYTHONUNBUFFERED="1")
     env.pop("CELL_CONFIG", None)
-    if not rospy.core.is_initialized():
-        rospy.init_node(f"{TAG}_client", anonymous=True, disable_signals=True)
+    client_node(f"{TAG}_client")
     from cell_msgs.msg import LogEntries, ProcessState
-    mode_node = Node(env, "operation_mode_node", f"_cell_config:={path}", f"__name:={TAG}_mode")
+    mode = Nodes()
+    mode_node = mode.run("operation_mode", "operation_mode_node", f"_cell_config:={path}", f"__name:={TAG}_mode",
+                         env=env)
     nodes: dict[str, Node] = {}
     state = Latest("/cell/process/state", ProcessState)
     log = Latest("/cell/process/log", LogEntries)
 
     def start() -> dict[str, Node]:
         state.msg = None
-        nodes["server"] = Node(env, "process_server", f"_cell_config:={path}", f"__name:={TAG}_server")
-        nodes["client"] = Node(env, "process_node", f"_cell_config:={path}", f"__name:={TAG}_client_node")
-        wait_for(lambda: all(n.alive() for n in nodes.values()) and _service_up("/cell/process/start"), 30,
-                 what="the process nodes' services")
+        procs = Nodes()
+        nodes["server"] = procs.run("process_server", "process_server", f"_cell_config:={path}",
+                                    f"__name:={TAG}_server", env=env)
+        nodes["client"] = procs.run("process_node", "process_node", f"_cell_config:={path}",
+                                    f"__name:={TAG}_client_node", env=env)
+        procs.wait_ready("/cell/process/start", what="the process nodes' services")
         wait_for(lambda: state.msg is not None and state.msg.ready, 15, what="the client seeing the action server")
         return nodes
 
     def kill() -> None:
-        for name in list(nodes):
-            nodes.pop(name).kill()
+        killed = [nodes.pop(name) for name in list(nodes)]
+        for node in killed:
+            node.kill()
+        for node in killed:
+            node.check()
 
     try:
-        wait_for(lambda: mode_node.alive() and _service_up("/cell/set_mode"), 30, what="the operation-mode node")
+        mode.wait_ready("/cell/set_mode", what="the operation-mode node")
         yield {"start": start, "kill": kill, "nodes": nodes, "state": state, "log": log,
                "state_file": data_dir / "state" / "process.json"}
     finally:
         state.sub.unregister()
         log.sub.unregister()
-        for node in nodes.values():
+        ends = [*nodes.values(), mode_node]
+        for node in ends:   # one after the other: the process server, its client, the mode node
             node.stop()
-        mode_node.stop()
+        for node in ends:
+            node.check()
 
 
 def _texts(log: Latest) -> list[str]:
