@@ -1,30 +1,75 @@
 #!/usr/bin/env node
-// Soak (issue 15, `npm run bench -- --soak`): many clients at a steady rate through the BFF's /ros relay for
-// minutes, watching the memory of the BFF and of our rosbridge server. Starts its own stack (scripts/stack.js,
-// UR_SIM=0, ports 29080-29083, UR_HOST 127.0.0.41) with an admin user, stops it at the end or on Ctrl-C.
+// Soak (issues 15 and 28, `npm run bench -- --soak`): a whole simulated cell in use for minutes, watching the memory
+// of every process of the stack, their logs and whether every client is still served at the end. Starts its own
+// stack (scripts/stack.js with config/demo-cell.yaml and the simulated cell, UR_SIM=1, ports 29080-29083, UR_HOST
+// 127.0.0.41: away from the e2e stacks' 18080.. and 127.0.0.9), stops it at the end or on Ctrl-C.
 //
-// Each client logs in on its own (own session cookie) and opens /ros. Client i advertises /soak/c<i>
-// (std_msgs/String "<seq> <send time>"), publishes it at --rate Hz and subscribes to /soak/c<i+1 mod n>
-// (queue_length 10), so every message goes BFF -> rosbridge -> ROS (TCPROS) -> rosbridge -> BFF -> a client.
-// Once a second each client calls a service, /cell/get_mode and /rosapi/topics in turn (the second one goes
-// through the BFF's rosapi filter). Once a minute each client GETs /api/auth/me, as the app does, and keeps a
-// renewed cookie. A closed socket is reopened after 1 s (logging in again if the cookie is refused).
+// The relay load (issue 15): --clients admin clients, each logged in on its own (own session cookie) with /ros
+// open. Client i advertises /soak/c<i> (std_msgs/String "<seq> <send time>"), publishes it at --rate Hz and
+// subscribes to /soak/c<i+1 mod n> (queue_length 10), so every message goes BFF -> rosbridge -> ROS (TCPROS) ->
+// rosbridge -> BFF -> a client. Once a second each client calls a service, /cell/get_mode and /rosapi/topics in
+// turn (the second one goes through the BFF's rosapi filter). Once a minute each client GETs /api/auth/me, as the
+// app does, and keeps a renewed cookie. A closed socket is reopened after 1 s (logging in again if refused).
 //
-// Every minute: RSS of the BFF and of the rosbridge server (median of samples every 5 s in that minute, from
-// /proc/<pid>/status VmRSS), their CPU, messages sent/received, loss (sequence gaps), latency p50/p99
-// (receipt - send, one clock), service calls, errors and status messages, reconnects.
-// Verdict: RSS flat within 10 %: after a 1-minute warm-up, max/min of the per-minute RSS values (minutes 2..N)
-// <= 1.10, for each process; exit 1 on FAIL.
+// The cell in use (issue 28; bench/soak_cell.mjs), each its own login and /ros socket, as the app's pages:
+// - a camera viewer (operator, the Cameras page): the first stream (/cell/camera/workbench/image/compressed) in
+//   CBOR, throttle_rate 33 ms, queue_length 1; frames (JPEG bytes) counted, the longest gap between two.
+// - a jogging session (admin, the Manual page): the arm's driver state, /cell/manual/groups, the jog topic
+//   advertised; takes the control lease over HTTP (POST /api/control/take, heartbeat every 500 ms, release), then
+//   jogs joint 1 (the base) hold-to-run as the page does: the JogCommand (speed 0.5, as e2e/lib/manual.js jogMsg)
+//   at once and every 50 ms for 1 s, then direction 0; + then -, 0.3 s apart, 0.7 s pause, twice per window, the
+//   first direction alternating, so the arm ends where it began (the process goes home first anyway). An arm away
+//   from home (a run stopped or failed mid-cycle) is first moved straight up when low, then home (Move to pose,
+//   Move to home): swinging the base with the fingers around a part in the fixture ends in a protective stop. A
+//   jog is done when the driver's state shows the joint moved > 0.005 rad (soak_cell.mjs MOVED_RAD), refused
+//   otherwise (the BFF's or the driver's reason noted); travel median and minimum per minute.
+// - a running process (operator, the Process page): /cell/process/state and /log and the status fields' topics;
+//   takes the lease, Start {cycles}, releases the lease when the run ended; cycles counted from the state's
+//   cycle counter.
+// One arm, one lease: a real cell does not jog an arm its process is moving (the driver ignores a jog during a
+// move), and the lease lets one session at a time command motion. So the two take turns, as a shift would:
+// the process runs until the fixture is full (the demo cell's pose tables have 3 entries: 3 cycles fill its 3
+// pockets, a 4th would pick at an empty place); the operator releases control; the admin takes it, jogs (2 pairs,
+// ~6 s), and puts the 3 parts back where the process picks them with the Manual page's Move to pose and gripper
+// buttons (the sim has no feeder; a real cell has the parts restocked), then home, and releases control; the
+// operator takes it and starts again. The manual session's turn comes first. A round takes about 1.5 min (3
+// cycles of ~13 s, ~7 s of jogging, ~45 s putting parts back, on 2 cores shared with an e2e run): ~2 cycles and
+// ~3 jogs a minute. A run that ends in error counts as a process error; after 3 in a row no more Starts.
+// At the end (after the last minute): the operator stops the process if it runs (Stop needs no lease), the admin
+// takes control, clears the arm (as above) and jogs once more: "can still take the lease, and the jog moves the arm".
+//
+// Every minute: RSS of every process of the stack (e2e/lib/stack.js pidsOfStack: the processes whose environment
+// names this stack's DATA_DIR), grouped by name (ROS nodes by node name: rosbridge_websocket, manual, process, ...;
+// roscore, rosmaster, roslaunch, sim, sim renderer, bff, stack, watchdog, ...), as the median of samples every 5 s in
+// that minute (/proc/<pid>/status VmRSS, summed over a group's processes), and CPU; for the relay: messages
+// sent/received, loss (sequence gaps), latency p50/p99 (receipt - send, one clock), service calls, errors and status
+// messages, reconnects, clients that received nothing; for the cell: camera frames and fps, jogs done/refused,
+// cycles completed, process errors, parts put back, lease takes/refusals/losses; error lines in the logs.
+// Verdict (a table; exit 1 on any FAIL):
+// - RSS flat within 10 %, for every process: after a 1-minute warm-up, max/min of the per-minute RSS values
+//   (minutes 2..N) <= 1.10, and no restart (a group's pid replaced) and not gone;
+// - no error in any log: the stack's output (DATA_DIR/stack.log) and its ROS log files (DATA_DIR/ros/log, but
+//   rosout.log, which repeats the nodes' own) written after start-up: lines with Traceback, ERROR, FATAL,
+//   "[bff] ... error", uncaught/unhandled, exited, "process has died"; each listed (start-up ones listed apart,
+//   not judged);
+// - every client still live at the end: each relay client received messages in the last minute; the camera viewer
+//   got frames in the last minute; the jogging session took the lease at the end and its jog moved the arm; the
+//   process completed a cycle in the last 3 minutes (the whole soak when shorter);
+// - the cell's work without refusals or errors: no process run ended in error, every part put back, no jog
+//   refused, the lease never refused nor lost (a lapsed heartbeat).
 // Options: --minutes N (10), --clients N (25), --rate HZ (100), --json FILE (also written to
 // bench/results/soak-<date>.json when bench/results exists).
 // BENCH_QUICK=1 (npm run bench -- --quick [soak]): 3 "minutes" of 8 s each (SOAK_MINUTE_MS, --minutes still win),
 // the same figures for a quick look; the RSS verdict over windows that short is indicative only (no exit 1 for it;
-// a restart still fails), and the JSON goes to bench/results/soak-quick-<date>.json, never over the full run's.
+// a restart still fails), and so is the process's when the soak is under 40 s (a round takes longer); the JSON goes
+// to bench/results/soak-quick-<date>.json, never over the full run's.
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { WebSocket } from 'ws';
-import { stackEnv, addUser, startStack, stopStack, pidsOfStack, REPO_ROOT } from '../e2e/lib/stack.js';
+import yaml from 'js-yaml';
+import { stackEnv, addUser, startStack, stopStack, REPO_ROOT } from '../e2e/lib/stack.js';
+import { HttpSession, RosLink, Lease, CameraViewer, ManualSession, ProcessSession, CellSchedule, ProcWatch, LogWatch } from './soak_cell.mjs';
 
 const args = process.argv.slice(2);
 const opt = (name, dflt) => { const i = args.indexOf(`--${name}`); return i >= 0 && i + 1 < args.length ? args[i + 1] : dflt; };
@@ -47,15 +92,11 @@ const PASSWORD = 'soak-password';
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 const now = () => performance.now();
-const mib = (kb) => kb / 1024;
 const median = (xs) => { const s = [...xs].sort((a, b) => a - b); return s.length ? (s.length % 2 ? s[(s.length - 1) / 2] : (s[s.length / 2 - 1] + s[s.length / 2]) / 2) : NaN; };
 /** Least-squares slope of ys against 0..n-1 (per step). @param {number[]} ys */
 const slope = (ys) => { const n = ys.length; if (n < 2) return NaN; const mx = (n - 1) / 2; const my = ys.reduce((a, b) => a + b, 0) / n; let sxy = 0; let sxx = 0; ys.forEach((y, x) => { sxy += (x - mx) * (y - my); sxx += (x - mx) ** 2; }); return sxy / sxx; };
-const rssKb = (pid) => { try { return Number(/VmRSS:\s+(\d+)/.exec(fs.readFileSync(`/proc/${pid}/status`, 'utf8'))[1]); } catch { return NaN; } };
-const cpuTicks = (pid) => { try { const f = fs.readFileSync(`/proc/${pid}/stat`, 'utf8').split(') ')[1].split(' '); return Number(f[11]) + Number(f[12]); } catch { return NaN; } };
 /** [busy, total] jiffies of the whole host (all cores) */
 const hostTicks = () => { const f = fs.readFileSync('/proc/stat', 'utf8').split('\n')[0].trim().split(/\s+/).slice(1).map(Number); const tot = f.reduce((a, b) => a + b, 0); return [tot - f[3] - (f[4] || 0), tot]; };
-const cmdline = (pid) => { try { return fs.readFileSync(`/proc/${pid}/cmdline`, 'utf8').split('\0').join(' '); } catch { return ''; } };
 
 /** Latency histogram: 0.05 ms buckets up to 10 s (the last bucket holds everything above). */
 class Hist {
@@ -75,6 +116,12 @@ const newWindow = () => ({ sent: 0, received: 0, perClient: new Uint32Array(CLIE
   svcLat: new Hist(), status: 0, wsErrors: 0, closes: 0, reconnects: 0, skippedTicks: 0 });
 let win = newWindow();
 const total = newWindow();
+/** The cell's figures of one minute (bench/soak_cell.mjs writes them). */
+const newCellWindow = () => ({ camFrames: 0, camBytes: 0, camBad: 0, camMaxGapMs: 0, jogOk: 0, jogRefused: 0, jogTravel: [], cycles: 0, cycleTimes: [], runs: 0,
+  processErrors: 0, processLogErrors: 0, restocked: 0, restockErrors: 0, homed: 0, leaseTakes: 0, leaseRefused: 0, leaseLost: 0 });
+let cellWin = newCellWindow();
+const cellTotal = newCellWindow();
+const getCellWin = () => cellWin;
 /** Odd things, grouped by kind (client number and call ids left out): kind -> count, first and last time, clients. */
 const notes = new Map();
 const note = (s) => {
@@ -88,19 +135,30 @@ const note = (s) => {
 };
 
 // ---- the stack ----
-const env = stackEnv({ port: PORT, masterPort: PORT + 1, rosbridgePort: PORT + 2, urHost: '127.0.0.41', extraEnv: { UR_SIM: '0' } });
+const CELL_FILE = path.join(REPO_ROOT, 'config/demo-cell.yaml');
+const cell = /** @type {any} */ (yaml.load(fs.readFileSync(CELL_FILE, 'utf8')));
+const UR_HOST = '127.0.0.41';
+// The simulated cell as `npm start` runs it (scripts/stack.js starts sim/ at UR_HOST), as e2e/lib/global-setup.js.
+const env = stackEnv({ port: PORT, masterPort: PORT + 1, rosbridgePort: PORT + 2, urHost: UR_HOST, extraEnv: { CELL_CONFIG: CELL_FILE, UR_SIM: '1' } });
+delete env.UR_HOSTS; // (an e2e shell's per-arm addresses must not leak in: one arm, at UR_HOST)
+delete env.SIM_ARGS;
 addUser(env, USER, 'admin', PASSWORD);
+const CELL_USERS = { jog: ['soak-jog', 'admin'], process: ['soak-process', 'operator'], camera: ['soak-camera', 'operator'] };
+for (const [name, role] of Object.values(CELL_USERS)) addUser(env, name, role, `${name}-password`);
 const base = `http://127.0.0.1:${PORT}`;
 let stack = null;
 let stopping = false;
 /** @type {Client[]} */
 const clients = [];
+/** @type {RosLink[]} the cell's sessions' sockets */
+const cellLinks = [];
 
 async function shutdown(code, why) {
   if (stopping) return;
   stopping = true;
   if (why) console.log(why);
   for (const c of clients) c.close();
+  for (const l of cellLinks) l.close();
   if (stack) {
     const s = await stopStack(stack.proc);
     console.log(`stack stopped in ${s.toFixed(1)} s`);
@@ -263,13 +321,6 @@ function ticker(hz, phaseMs, fn) {
   return () => clearTimeout(timer);
 }
 
-function findPids() {
-  const pids = pidsOfStack(env.DATA_DIR);
-  const bff = pids.find((p) => cmdline(p).includes('bff/src/server.js'));
-  const rosbridge = pids.find((p) => /python/.test(cmdline(p)) && cmdline(p).includes('rosbridge_server'));
-  return { bff, rosbridge };
-}
-
 const f1 = (x) => (Number.isFinite(x) ? x.toFixed(1) : '-');
 const f2 = (x) => (Number.isFinite(x) ? x.toFixed(2) : '-');
 const COLS = [
@@ -282,39 +333,81 @@ const row = (r) => [
   r.lost, r.silentClients, f2(r.p50Ms), f2(r.p99Ms), `${r.svcOk}/${r.svcFail}/${r.svcTimeout}`, f2(r.svcP99Ms), r.status + r.wsErrors, r.reconnects,
 ].map((v, k) => String(v).padStart(COLS[k][1])).join(' | ');
 
+const f0 = (x) => (Number.isFinite(x) ? x.toFixed(0) : '-');
+/** The cell's figures of one minute, one line. */
+const cellLine = (c) => `     cell: camera ${c.camFrames} frames (${f1(c.camFps)} fps, max gap ${f2(c.camMaxGapMs / 1000)} s, ${f1(c.camMiB)} MiB${c.camBad ? `, ${c.camBad} bad` : ''})` +
+  ` | jogs ${c.jogOk} done, ${c.jogRefused} refused${c.jogOk ? ` (travel median ${f2(c.jogTravelMedian)}, min ${f2(c.jogTravelMin)} rad)` : ''}${c.homed ? `, ${c.homed}x homed first` : ''}` +
+  ` | process ${c.cycles} cycles${c.cycles ? ` (median ${f1(c.cycleMedianS)} s)` : ''}, ${c.runs} starts, ${c.processErrors} errors${c.processLogErrors ? ` (${c.processLogErrors} error log entries)` : ''}` +
+  ` | parts put back ${c.restocked}${c.restockErrors ? `, ${c.restockErrors} failed` : ''} | lease ${c.leaseTakes} taken${c.leaseRefused ? `, ${c.leaseRefused} refused` : ''}${c.leaseLost ? `, ${c.leaseLost} lost` : ''}` +
+  ` | log errors ${c.logErrors}`;
+/** Every process's RSS (MiB, that minute's median) and CPU % of one core, one line. */
+const procLine = (pm, order) => `     RSS MiB (CPU %): ${order.filter((n) => pm[n]).map((n) => `${n} ${f1(pm[n].rssMiB)} (${f0(pm[n].cpuPct)})`).join(', ')}` +
+  ` | all ${f1(Object.values(pm).reduce((a, p) => a + (p.rssMiB || 0), 0))} MiB`;
+
 async function main() {
   const date = new Date().toISOString();
-  console.log(`Soak: ${CLIENTS} clients x ${RATE} Hz through the BFF's /ros for ${MINUTES} min${MINUTE_MS !== 60_000 ? ` of ${MINUTE_MS / 1000} s each${QUICK ? ', quick' : ''}` : ''} (${date.slice(0, 16)}Z, ${os.cpus().length} cores, load ${os.loadavg().map((l) => l.toFixed(1)).join(' ')})`);
-  console.log(`starting the stack (UR_SIM=0, BFF on ${PORT}, rosbridge on ${PORT + 2}, DATA_DIR ${env.DATA_DIR}) ...`);
-  stack = await startStack(env);
+  console.log(`Soak: the demo cell in use (camera viewer, jogging, process) + ${CLIENTS} clients x ${RATE} Hz through the BFF's /ros for ${MINUTES} min${MINUTE_MS !== 60_000 ? ` of ${MINUTE_MS / 1000} s each${QUICK ? ', quick' : ''}` : ''} (${date.slice(0, 16)}Z, ${os.cpus().length} cores, load ${os.loadavg().map((l) => l.toFixed(1)).join(' ')})`);
+  console.log(`starting the stack (${path.relative(REPO_ROOT, CELL_FILE)}, simulated cell at ${UR_HOST}, BFF on ${PORT}, rosbridge on ${PORT + 2}, DATA_DIR ${env.DATA_DIR}) ...`);
+  const tStack = now();
+  stack = await startStack(env, 120_000);
   if (interrupted) return shutdown(130, 'interrupted');
-  let pids = findPids();
-  if (!pids.bff || !pids.rosbridge) throw new Error(`cannot find the processes of this stack: BFF ${pids.bff}, rosbridge ${pids.rosbridge}`);
-  console.log(`BFF pid ${pids.bff}, rosbridge server pid ${pids.rosbridge}`);
+  console.log(`stack ready in ${f1((now() - tStack) / 1000)} s`);
+  const procs = new ProcWatch(env.DATA_DIR, note);
+  const logs = new LogWatch(stack, env.DATA_DIR);
 
   for (let i = 0; i < CLIENTS; i++) clients.push(new Client(i));
   for (const c of clients) await c.open(); // one login after the other: each its own session
+
+  // The cell's sessions, each its own login and /ros socket.
+  const session = async (key) => {
+    const [user] = CELL_USERS[key];
+    const http = new HttpSession(base, user, `${user}-password`);
+    await http.login();
+    const link = new RosLink(http, PORT, key, note);
+    cellLinks.push(link);
+    await link.open();
+    return { http, link };
+  };
+  const cam = await session('camera');
+  const jogS = await session('jog');
+  const procS = await session('process');
+  const camTopic = cell.video.streams[0].topic;
+  const viewer = new CameraViewer(cam.link, camTopic, getCellWin);
+  viewer.start();
+  const manual = new ManualSession(jogS.link, cell, note, getCellWin);
+  await manual.open();
+  const processS = new ProcessSession(procS.link, cell, note, getCellWin);
+  processS.open();
+  const jogLease = new Lease(jogS.http, 'jog session', note, getCellWin);
+  const schedule = new CellSchedule({ manual, process: processS, jogLease, processLease: new Lease(procS.http, 'process session', note, getCellWin), cell, note, win: getCellWin });
+  console.log(`waiting for the robot driver and the process server ...`);
+  await schedule.ready(90_000, () => interrupted);
   await sleep(2000); // advertisements and subscriptions settle (rospy connects publishers to subscribers)
   if (interrupted) return shutdown(130, 'interrupted');
 
-  const startRss = { bff: mib(rssKb(pids.bff)), rosbridge: mib(rssKb(pids.rosbridge)) };
-  console.log(`RSS with ${CLIENTS} clients connected, before the load: BFF ${f1(startRss.bff)} MiB, rosbridge ${f1(startRss.rosbridge)} MiB`);
+  const groups = procs.start();
+  const startRss = {};
+  for (const [name, pids] of groups) startRss[name] = pids.map((p) => { try { return Number(/VmRSS:\s+(\d+)/.exec(fs.readFileSync(`/proc/${p}/status`, 'utf8'))[1]); } catch { return 0; } }).reduce((a, b) => a + b, 0) / 1024;
+  const order = [...groups.keys()].sort((a, b) => startRss[b] - startRss[a]);
+  console.log(`${groups.size} processes in the stack, RSS with every client connected, before the load (MiB): ${order.map((n) => `${n} ${f1(startRss[n])}${groups.get(n).length > 1 ? ` (${groups.get(n).length} pids)` : ''}`).join(', ')}`);
+  logs.mark();
+  const startupErrors = logs.startup();
   console.log(`per minute: RSS = median of samples every ${SAMPLE_MS / 1000} s in that minute; CPU % of one core (bench = this load generator);`);
   console.log(`host busy % = all ${os.cpus().length} cores, every process on the machine; rx/s = received per second, all clients;`);
   console.log('lost = gaps in the sequence numbers; silent = clients that received nothing in that minute;');
-  console.log('latency = receipt - send, same clock; svc = service calls ok/failed/timed out');
+  console.log('latency = receipt - send, same clock; svc = service calls ok/failed/timed out;');
+  console.log(`cell: the camera viewer's frames (${camTopic}), jogs, process cycles, parts put back, lease, error lines in the logs; then every process's RSS`);
   console.log(header());
 
   const stops = clients.map((c, i) => ticker(RATE, (i * 1000) / RATE / CLIENTS, () => c.publish()));
   stops.push(...clients.map((c, i) => ticker(1, (i * 1000) / CLIENTS, () => c.callService())));
   let touchN = 0;
   const touchTimer = setInterval(() => { clients[touchN++ % CLIENTS].touch(); }, MINUTE_MS / CLIENTS);
+  const cellTouch = setInterval(() => { for (const s of [cam, jogS, procS]) s.http.touch().catch((e) => note(`/api/auth/me ${e.message}`)); }, Math.min(MINUTE_MS, 60_000));
+  const runP = schedule.run().catch((e) => note(`cell schedule stopped: ${e.stack || e}`));
 
   /** @type {any[]} */
   const minutes = [];
-  let samples = { bff: [], rosbridge: [] };
-  const cpu0 = { bff: cpuTicks(pids.bff), rosbridge: cpuTicks(pids.rosbridge) };
-  const restarts = { bff: 0, rosbridge: 0 };
   let bench0 = process.cpuUsage();
   let host0 = hostTicks();
   const t0 = now();
@@ -325,91 +418,183 @@ async function main() {
       await sleep(Math.max(0, Math.min(nextSample, end) - now()));
       if (now() >= nextSample - 1) {
         nextSample += SAMPLE_MS;
-        const cur = findPids();
-        for (const k of /** @type {const} */ (['bff', 'rosbridge'])) {
-          if (cur[k] && cur[k] !== pids[k]) { restarts[k]++; note(`${k} pid changed ${pids[k]} -> ${cur[k]} (restarted)`); pids[k] = cur[k]; cpu0[k] = cpuTicks(cur[k]); }
-          const kb = rssKb(pids[k]);
-          if (Number.isFinite(kb)) samples[k].push(mib(kb));
-        }
+        procs.sample(m);
       }
     }
     if (interrupted) break;
     const w = win;
     win = newWindow();
+    const cw = cellWin;
+    cellWin = newCellWindow();
     const elapsedS = MINUTE_MS / 1000;
-    const cpu1 = { bff: cpuTicks(pids.bff), rosbridge: cpuTicks(pids.rosbridge) };
+    const pm = procs.endMinute(elapsedS);
     const bench1 = process.cpuUsage(bench0);
     const host1 = hostTicks();
+    const newErrors = logs.scanNew();
+    const c = {
+      camFrames: cw.camFrames, camFps: cw.camFrames / elapsedS, camMaxGapMs: cw.camMaxGapMs, camMiB: cw.camBytes / 1048576, camBad: cw.camBad,
+      jogOk: cw.jogOk, jogRefused: cw.jogRefused, jogTravelMedian: median(cw.jogTravel), jogTravelMin: Math.min(...cw.jogTravel), homed: cw.homed, cycles: cw.cycles, cycleMedianS: median(cw.cycleTimes), runs: cw.runs,
+      processErrors: cw.processErrors, processLogErrors: cw.processLogErrors, restocked: cw.restocked, restockErrors: cw.restockErrors,
+      leaseTakes: cw.leaseTakes, leaseRefused: cw.leaseRefused, leaseLost: cw.leaseLost, logErrors: newErrors.length,
+    };
     const r = {
-      minute: m, bffRssMiB: median(samples.bff), rosbridgeRssMiB: median(samples.rosbridge),
-      bffRssMaxMiB: Math.max(...samples.bff), rosbridgeRssMaxMiB: Math.max(...samples.rosbridge),
-      bffCpuPct: ((cpu1.bff - cpu0.bff) / 100 / elapsedS) * 100, rosbridgeCpuPct: ((cpu1.rosbridge - cpu0.rosbridge) / 100 / elapsedS) * 100,
+      minute: m, bffRssMiB: pm.bff?.rssMiB, rosbridgeRssMiB: pm.rosbridge_websocket?.rssMiB,
+      bffCpuPct: pm.bff?.cpuPct, rosbridgeCpuPct: pm.rosbridge_websocket?.cpuPct,
       benchCpuPct: ((bench1.user + bench1.system) / 1e6 / elapsedS) * 100, hostBusyPct: ((host1[0] - host0[0]) / (host1[1] - host0[1])) * 100,
       sent: w.sent, received: w.received, receivedPerS: w.received / elapsedS, lost: w.lost,
       silentClients: w.perClient.filter((n) => n === 0).length, minPerClient: Math.min(...w.perClient), maxPerClient: Math.max(...w.perClient), reordered: w.reordered,
       p50Ms: w.lat.pct(50), p99Ms: w.lat.pct(99), maxMs: w.lat.max, svcOk: w.svcOk, svcFail: w.svcFail, svcTimeout: w.svcTimeout,
       svcP50Ms: w.svcLat.pct(50), svcP99Ms: w.svcLat.pct(99), status: w.status, wsErrors: w.wsErrors, closes: w.closes,
-      reconnects: w.reconnects, skippedTicks: w.skippedTicks, load1: os.loadavg()[0],
+      reconnects: w.reconnects, skippedTicks: w.skippedTicks, load1: os.loadavg()[0], cell: c, processes: pm,
     };
-    Object.assign(cpu0, cpu1);
     bench0 = process.cpuUsage();
     host0 = host1;
-    samples = { bff: [], rosbridge: [] };
     for (const k of ['sent', 'received', 'lost', 'reordered', 'svcOk', 'svcFail', 'svcTimeout', 'status', 'wsErrors', 'closes', 'reconnects', 'skippedTicks']) total[k] += w[k];
     total.lat.merge(w.lat);
     total.svcLat.merge(w.svcLat);
+    for (const k of Object.keys(cellTotal)) if (Array.isArray(cw[k])) cellTotal[k].push(...cw[k]); else cellTotal[k] += cw[k];
     minutes.push(r);
+    for (const n of Object.keys(pm)) if (!order.includes(n)) order.push(n);
     console.log(row(r));
+    console.log(cellLine(c));
+    console.log(procLine(pm, order));
   }
+  const tEnd = now();
+  const camLastAt = viewer.lastAt;
   for (const s of stops) s();
   clearInterval(touchTimer);
   await sleep(500); // in-flight messages arrive (not counted: outside the minutes)
+  const lastMinute = minutes.at(-1);
+
+  // ---- the end: the process stopped, the jogging session takes control and jogs once more ----
+  let fin = { took: false, jog: null };
+  if (!interrupted) {
+    console.log('\nthe end: stopping the process if it runs; the jogging session takes control and jogs once more ...');
+    fin = await schedule.finish(runP);
+  } else schedule.stopping = true;
+  clearInterval(cellTouch);
+  logs.scanNew();
+  const soakErrors = logs.found;
 
   // ---- summary and verdict ----
   const judged = minutes.filter((r) => r.minute >= 2);
-  const verdict = {};
+  const indicative = MINUTE_MS < 60_000;
+  const soakS = (tEnd - t0) / 1000;
   console.log();
-  console.log(`Summary (${minutes.length} of ${MINUTES} min${interrupted ? ', interrupted' : ''}): sent ${total.sent}, received ${total.received} ` +
+  console.log(`Summary (${minutes.length} of ${MINUTES} min${interrupted ? ', interrupted' : ''}): relay: sent ${total.sent}, received ${total.received} ` +
     `(${f1((total.received / Math.max(1, total.sent)) * 100)} %), lost ${total.lost}, reordered ${total.reordered}, ` +
     `latency p50 ${f2(total.lat.pct(50))} / p99 ${f2(total.lat.pct(99))} / max ${f2(total.lat.max)} ms; ` +
     `service calls ok ${total.svcOk}, failed ${total.svcFail}, timed out ${total.svcTimeout}, p50 ${f2(total.svcLat.pct(50))} / p99 ${f2(total.svcLat.pct(99))} ms; ` +
     `status/errors ${total.status + total.wsErrors}, socket closes ${total.closes}, reconnects ${total.reconnects}, skipped publish ticks ${total.skippedTicks}`);
-  console.log('(trend: least-squares slope of the same per-minute values, for information: a leak grows steadily, GC moves RSS both ways)');
-  console.log(`Verdict: RSS flat within 10 % = after a 1-minute warm-up, max/min of the per-minute RSS (median of that minute's samples, minutes 2 to the last) <= ${FLAT.toFixed(2)}`);
-  console.log('process   | start MiB | min 1 MiB | min MiB | max MiB | last MiB | max/min | trend MiB/min | restarts | verdict');
+  console.log(`cell: camera ${cellTotal.camFrames} frames (${f1(cellTotal.camFrames / soakS)} fps, ${cellTotal.camBad} bad); jogs ${cellTotal.jogOk} done, ${cellTotal.jogRefused} refused` +
+    ` (travel median ${f2(median(cellTotal.jogTravel))}, min ${f2(Math.min(...cellTotal.jogTravel))} rad); process ${cellTotal.cycles} cycles (median ${f1(median(cellTotal.cycleTimes))} s) in ${cellTotal.runs} starts, ${cellTotal.processErrors} errors;` +
+    ` parts put back ${cellTotal.restocked}, ${cellTotal.restockErrors} failed; lease taken ${cellTotal.leaseTakes}, refused ${cellTotal.leaseRefused}, lost ${cellTotal.leaseLost};` +
+    ` camera/jog/process sockets reconnected ${cellLinks.map((l) => l.reconnects).reduce((a, b) => a + b, 0)} times`);
+
+  /** @type {{check: string, value: string, verdict: string}[]} */
+  const verdictRows = [];
   let fail = false;
-  for (const [k, label, key] of /** @type {const} */ ([['bff', 'BFF', 'bffRssMiB'], ['rosbridge', 'rosbridge', 'rosbridgeRssMiB']])) {
-    const xs = judged.map((r) => r[key]);
+  const judge = (check, value, verdict) => {
+    verdictRows.push({ check, value, verdict });
+    if (verdict.startsWith('FAIL') && !verdict.includes('indicative')) fail = true;
+  };
+
+  // RSS of every process
+  console.log('\nRSS of every process, MiB (median of each minute), and CPU % of one core (mean over the minutes):');
+  const rssHead = ['process'.padEnd(20), 'start', ...minutes.map((r) => `m${r.minute}`), 'CPU %'];
+  console.log(rssHead.map((h, k) => (k ? h.padStart(7) : h)).join(' '));
+  const rssVerdict = {};
+  for (const name of order) {
+    const per = minutes.map((r) => r.processes[name]?.rssMiB);
+    const cpus = minutes.map((r) => r.processes[name]?.cpuPct).filter(Number.isFinite);
+    console.log([name.padEnd(20), f1(startRss[name]).padStart(7), ...per.map((x) => f1(x).padStart(7)), f1(cpus.reduce((a, b) => a + b, 0) / Math.max(1, cpus.length)).padStart(7)].join(' '));
+    const xs = judged.map((r) => r.processes[name]?.rssMiB).filter(Number.isFinite);
     const lo = Math.min(...xs); const hi = Math.max(...xs);
     const ratio = xs.length ? hi / lo : NaN;
-    let v;
-    if (xs.length < 2) v = 'n/a: fewer than 2 minutes after the warm-up';
-    else if (restarts[k]) v = 'FAIL: restarted';
-    else if (MINUTE_MS < 60_000) v = `${ratio <= FLAT ? 'PASS' : 'FAIL'} (indicative: ${MINUTE_MS / 1000} s minutes)`;
-    else v = ratio <= FLAT ? 'PASS' : 'FAIL';
-    if (v.startsWith('FAIL') && !v.includes('indicative')) fail = true;
     const trend = slope(xs);
-    verdict[k] = { startMiB: startRss[k], minute1MiB: minutes[0]?.[key], minMiB: lo, maxMiB: hi, lastMiB: xs.at(-1), ratio, trendMiBPerMin: trend, restarts: restarts[k], verdict: v };
-    console.log(`${label.padEnd(9)} | ${f1(startRss[k]).padStart(9)} | ${f1(minutes[0]?.[key]).padStart(9)} | ${f1(lo).padStart(7)} | ${f1(hi).padStart(7)} | ${f1(xs.at(-1)).padStart(8)} | ${(Number.isFinite(ratio) ? ratio.toFixed(3) : '-').padStart(7)} | ${(Number.isFinite(trend) ? (trend >= 0 ? '+' : '') + trend.toFixed(2) : '-').padStart(13)} | ${String(restarts[k]).padStart(8)} | ${v}`);
+    const restarts = procs.restarts.get(name) || 0;
+    let v;
+    if (procs.gone.has(name)) v = `FAIL: gone in minute ${procs.gone.get(name)}`;
+    else if (restarts) v = `FAIL: restarted (${restarts}x)`;
+    else if (procs.appeared.has(name)) v = `n/a: appeared in minute ${procs.appeared.get(name)}`;
+    else if (xs.length < 2) v = 'n/a: fewer than 2 minutes after the warm-up';
+    else if (indicative) v = `${ratio <= FLAT ? 'PASS' : 'FAIL'} (indicative: ${MINUTE_MS / 1000} s minutes)`;
+    else v = ratio <= FLAT ? 'PASS' : 'FAIL';
+    rssVerdict[name] = { startMiB: startRss[name], minute1MiB: minutes[0]?.processes[name]?.rssMiB, minMiB: lo, maxMiB: hi, lastMiB: xs.at(-1), ratio, trendMiBPerMin: trend, restarts, verdict: v };
+    judge(`RSS flat within 10 %: ${name}`, xs.length ? `${f1(lo)}-${f1(hi)} MiB, max/min ${Number.isFinite(ratio) ? ratio.toFixed(3) : '-'}, trend ${Number.isFinite(trend) ? (trend >= 0 ? '+' : '') + trend.toFixed(2) : '-'} MiB/min` : '-', v);
+  }
+
+  // Logs
+  judge('no error in any log (after start-up)', `${soakErrors.length} error lines`, soakErrors.length ? 'FAIL' : 'PASS');
+
+  // Every client still live at the end
+  if (lastMinute) {
+    judge('relay clients live at the end', `${CLIENTS - lastMinute.silentClients}/${CLIENTS} received in the last minute (min ${lastMinute.minPerClient} a client)`, lastMinute.silentClients ? 'FAIL' : 'PASS');
+    const lc = lastMinute.cell;
+    judge('camera viewer live at the end', `${lc.camFrames} frames in the last minute (${f1(lc.camFps)} fps), the last ${f1((tEnd - camLastAt) / 1000)} s before the end`, lc.camFrames ? 'PASS' : 'FAIL');
+  } else judge('clients live at the end', 'no minute completed', 'n/a');
+  if (!interrupted) {
+    const j = fin.jog;
+    judge('jogging session live at the end', fin.took ? (j ? `took the lease; its last jog ${j.moved ? `moved the arm ${f2(j.travel)} rad` : `did not move the arm: ${j.why}`}` : 'took the lease') : 'could not take the lease', fin.took && j?.moved ? 'PASS' : 'FAIL');
+  }
+  const liveMs = Math.min(180_000, tEnd - t0);
+  const sinceCycle = processS.lastCycleAt ? (tEnd - processS.lastCycleAt) / 1000 : NaN;
+  const processLive = processS.lastCycleAt > 0 && tEnd - processS.lastCycleAt <= liveMs;
+  const shortSoak = soakS < 40;
+  judge(`process live at the end (a cycle in the last ${f0(liveMs / 1000)} s)`, processS.lastCycleAt ? `${processS.cyclesTotal} cycles, the last ${f1(sinceCycle)} s before the end` : 'no cycle completed',
+    processLive ? 'PASS' : `FAIL${shortSoak ? ` (indicative: a ${f0(soakS)} s soak)` : ''}`);
+  const cellErrors = cellTotal.processErrors + cellTotal.restockErrors + cellTotal.jogRefused + cellTotal.leaseRefused + cellTotal.leaseLost;
+  judge('cell work without refusals or errors', `process errors ${cellTotal.processErrors}, parts not put back ${cellTotal.restockErrors}, jogs refused ${cellTotal.jogRefused}, lease refused ${cellTotal.leaseRefused}, lost ${cellTotal.leaseLost}`,
+    cellErrors ? 'FAIL' : 'PASS');
+
+  console.log(`\nVerdict (RSS: after a 1-minute warm-up, max/min of the per-minute RSS, minutes 2 to the last, <= ${FLAT.toFixed(2)}, no restart; trend = least-squares slope, for information):`);
+  const wc = Math.max(...verdictRows.map((v) => v.check.length));
+  const wv = Math.max(...verdictRows.map((v) => v.value.length));
+  for (const v of verdictRows) console.log(`  ${v.check.padEnd(wc)} | ${v.value.padEnd(wv)} | ${v.verdict}`);
+
+  if (soakErrors.length) {
+    console.log(`\nError lines in the logs during the soak (${soakErrors.length}; by text, numbers folded; source, count, first line verbatim):`);
+    printErrors(soakErrors);
+  }
+  if (startupErrors.length) {
+    console.log(`\nError lines during start-up (not judged; ${startupErrors.length}):`);
+    printErrors(startupErrors);
   }
   if (notes.size) {
     console.log('\nOdd events, by kind: count, first-last time, clients:');
-    for (const [kind, e] of [...notes].sort((a, b) => b[1].count - a[1].count).slice(0, 15)) console.log(`  ${String(e.count).padStart(6)} x ${e.first}-${e.last} ${e.clients.size ? `${e.clients.size} clients` : ''}: ${kind}`);
+    for (const [kind, e] of [...notes].sort((a, b) => b[1].count - a[1].count).slice(0, 25)) console.log(`  ${String(e.count).padStart(6)} x ${e.first}-${e.last} ${e.clients.size ? `${e.clients.size} clients` : ''}: ${kind}`);
   }
-  const logLines = stack.output().split('\n').filter((l) => /error|traceback|exception|closing \/ros|exited/i.test(l));
-  if (logLines.length) { console.log(`\nStack log: ${logLines.length} lines with error/exception/closing /ros/exited, first ones:`); for (const l of logLines.slice(0, 10)) console.log(`  ${l.slice(0, 200)}`); }
 
-  const doc = { bench: 'soak', date, host: { cores: os.cpus().length, load: os.loadavg() }, options: { minutes: MINUTES, minuteMs: MINUTE_MS, quick: QUICK, clients: CLIENTS, rateHz: RATE },
-    definition: `after a 1-minute warm-up, max/min of the per-minute RSS (median of samples every ${SAMPLE_MS / 1000} s) <= ${FLAT}`,
+  const doc = { bench: 'soak', date, host: { cores: os.cpus().length, load: os.loadavg() },
+    options: { minutes: MINUTES, minuteMs: MINUTE_MS, quick: QUICK, clients: CLIENTS, rateHz: RATE, cell: path.relative(REPO_ROOT, CELL_FILE), urHost: UR_HOST, cameraTopic: camTopic },
+    definition: `RSS: after a 1-minute warm-up, max/min of the per-minute RSS (median of samples every ${SAMPLE_MS / 1000} s) <= ${FLAT}, per process of the stack`,
     interrupted, startRss, minutes,
     total: { sent: total.sent, received: total.received, lost: total.lost, reordered: total.reordered, p50Ms: total.lat.pct(50), p99Ms: total.lat.pct(99), maxMs: total.lat.max,
       svcOk: total.svcOk, svcFail: total.svcFail, svcTimeout: total.svcTimeout, svcP50Ms: total.svcLat.pct(50), svcP99Ms: total.svcLat.pct(99),
       status: total.status, wsErrors: total.wsErrors, closes: total.closes, reconnects: total.reconnects, skippedTicks: total.skippedTicks },
-    verdict, notes: [...notes].map(([kind, e]) => ({ kind, count: e.count, first: e.first, last: e.last, clients: e.clients.size })) };
+    cell: { ...cellTotal, jogTravel: undefined, cycleTimes: undefined, jogTravelMedian: median(cellTotal.jogTravel), cycleMedianS: median(cellTotal.cycleTimes), end: fin },
+    verdict: { rss: rssVerdict, checks: verdictRows }, logErrors: soakErrors, startupLogErrors: startupErrors,
+    notes: [...notes].map(([kind, e]) => ({ kind, count: e.count, first: e.first, last: e.last, clients: e.clients.size })) };
   const files = [JSON_OUT, fs.existsSync(path.join(REPO_ROOT, 'bench/results')) ? path.join(REPO_ROOT, `bench/results/soak-${MINUTE_MS < 60_000 ? 'quick-' : ''}${date.slice(0, 10)}.json`) : null].filter(Boolean);
   for (const f of files) { fs.writeFileSync(f, JSON.stringify(doc, null, 2) + '\n'); console.log(`figures written to ${f}`); }
 
   await shutdown(interrupted ? 130 : fail ? 1 : 0, interrupted ? 'interrupted: summary of the minutes completed' : '');
+}
+
+/** Error lines folded by text (numbers, hex ids and paths' run ids as #), most frequent first. @param {{source: string, line: string, detail: string}[]} found */
+function printErrors(found) {
+  const byKind = new Map();
+  for (const f of found) {
+    const kind = `${f.source}: ${f.line.replace(/\d{4}-\d\d-\d\d[ T][\d:,.]+/g, '<time>').replace(/0x[0-9a-f]+|\d+(\.\d+)?/gi, '#')}`;
+    const e = byKind.get(kind) || { n: 0, first: f };
+    e.n++;
+    byKind.set(kind, e);
+  }
+  for (const [, e] of [...byKind].sort((a, b) => b[1].n - a[1].n).slice(0, 30)) {
+    console.log(`  ${String(e.n).padStart(4)} x [${e.first.source}] ${e.first.line.slice(0, 300)}`);
+    if (e.first.detail) console.log(`         -> ${e.first.detail.slice(0, 300)}`);
+  }
+  if (byKind.size > 30) console.log(`  ... and ${byKind.size - 30} more kinds`);
 }
 
 main().catch((e) => {
