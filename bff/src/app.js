@@ -11,6 +11,7 @@ import { authRoutes } from './core/auth/routes.js';
 import { AuditLog } from './core/audit/audit-log.js';
 import { ControlLease } from './core/control/lease.js';
 import { LeaseFile } from './core/control/lease-file.js';
+import { AwakeClock } from './core/control/awake-clock.js';
 import { controlRoutes } from './core/control/routes.js';
 import { configFor } from './core/access/pages.js';
 import { grantsFor, motionNames, argumentChecks } from './core/access/grants.js';
@@ -49,7 +50,9 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
   const audit = new AuditLog({ dir: env.dataDir });
   for (const r of audit.repairs) log(`audit log repaired at start: ${r.op} ${r.target}${r.detail ? ` (${r.detail})` : ''}`);
   const leaseFile = new LeaseFile(path.join(env.dataDir, 'control-lease.json'), log);
+  const awake = new AwakeClock();
   const lease = new ControlLease({
+    awake: () => awake.now(),
     timeoutMs: (cell.control?.heartbeat_timeout_s ?? 2) * 1000,
     onChange: (event, h, by) => audit.record({
       user: (by || h)?.username ?? null, role: (by || h)?.role ?? null, ip: null, op: `control.${event}`,
@@ -139,7 +142,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     res.status(e.status).json({ error: e.message });
   });
 
-  return { app, relay, cell, features, grants, openapi, users, tokens, audit, lease, initial, close: () => relay.close() };
+  return { app, relay, cell, features, grants, openapi, users, tokens, audit, lease, initial, close: () => { relay.close(); awake.stop(); } };
 }
 
 /** Origin (when the browser sends one) must name the host the request was sent to. @param {import('node:http').IncomingMessage} req */

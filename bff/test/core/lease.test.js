@@ -7,6 +7,7 @@ import path from 'node:path';
 import { startBff, login, tempDir } from '../helpers.js';
 import { ControlLease } from '../../src/core/control/lease.js';
 import { LeaseFile } from '../../src/core/control/lease-file.js';
+import { AwakeClock } from '../../src/core/control/awake-clock.js';
 
 const op = { username: 'op1', role: 'operator', sid: 'a' };
 
@@ -115,4 +116,29 @@ test('lease over HTTP across a BFF restart: kept when back in time (resumed_at),
   } finally {
     await third.stop();
   }
+});
+
+test('awake clock: runs with the process, a stall beyond the step cap is not counted', () => {
+  let t = 0;
+  const c = new AwakeClock({ now: () => t, timers: false, maxStepMs: 250 });
+  for (let i = 0; i < 10; i++) { t += 100; c.tick(); }
+  assert.equal(c.now(), 1000);
+  t += 3000; // the event loop did not run for 3 s
+  assert.equal(c.now(), 1250);
+});
+
+test('lease: a BFF stalled past the timeout keeps the holder whose heartbeat was waiting; real silence still ends it', () => {
+  let wall = 0;
+  const awake = new AwakeClock({ now: () => wall, timers: false });
+  const lease = new ControlLease({ timeoutMs: 2000, now: () => wall, awake: () => awake.now() });
+  const run = (/** @type {number} */ ms) => { for (let i = 0; i < ms / 100; i++) { wall += 100; awake.tick(); } };
+  assert.ok(lease.take(op).ok);
+  run(400);
+  wall += 2500; // the BFF's event loop was stalled 2.5 s; the heartbeat sent meanwhile is handled first thing after
+  assert.ok(lease.heartbeat(op), 'the stall is not the holder\'s silence');
+  run(1900);
+  assert.ok(lease.isHolder(op));
+  run(200); // 2.1 s of the BFF running without a heartbeat
+  assert.equal(lease.isHolder(op), false);
+  assert.match(/** @type {string} */ (lease.endedFor(op)), /expired/);
 });

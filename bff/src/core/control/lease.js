@@ -10,14 +10,19 @@
 export class ControlLease {
   /**
    * @param {{timeoutMs?: number, now?: () => number, onChange?: (event: string, h: Holder|null, by?: Holder) => void,
-   *   persist?: (saved: SavedLease | null) => void}} [o]  persist: called whenever the holder or its heartbeat changes
+   *   persist?: (saved: SavedLease | null) => void, awake?: () => number}} [o]  persist: called whenever the holder or
+   *   its heartbeat changes; awake: a clock (ms) that runs only while this process runs (AwakeClock), for the timeout:
+   *   a BFF whose own event loop was stalled (a busy host) did not hear the heartbeats waiting for it, and must not
+   *   count that time as the holder's silence
    */
-  constructor({ timeoutMs = 2000, now = Date.now, onChange = () => {}, persist = () => {} } = {}) {
+  constructor({ timeoutMs = 2000, now = Date.now, onChange = () => {}, persist = () => {}, awake = now } = {}) {
     this.timeoutMs = timeoutMs;
     this.now = now;
+    this.awake = awake;
     this.onChange = onChange;
     this.persist = persist;
-    /** @type {(SavedLease & {resumedAt?: number}) | null} */
+    /** beat: wall clock (saved, compared across a restart); heard: the awake clock at that heartbeat (the timeout).
+     * @type {(SavedLease & {heard: number, resumedAt?: number}) | null} */
     this.holder = null;
     /** Why the last holder lost control, told to that session when it next heartbeats. @type {{sid: string, reason: string} | null} */
     this.ended = null;
@@ -36,7 +41,7 @@ export class ControlLease {
     const gap = Math.max(0, startedAt - saved.beat);
     if (gap <= this.timeoutMs) {
       const t = this.now();
-      this.holder = { ...strip(saved), since: saved.since, beat: t, resumedAt: t };
+      this.holder = { ...strip(saved), since: saved.since, beat: t, heard: this.awake(), resumedAt: t };
       this.#save();
       this.onChange('resumed', strip(saved));
       return 'resumed';
@@ -58,6 +63,7 @@ export class ControlLease {
     if (this.holder?.resumedAt !== undefined) {
       const t = this.now();
       this.holder.beat = t;
+      this.holder.heard = this.awake();
       this.holder.resumedAt = t;
       this.#save();
     }
@@ -65,7 +71,7 @@ export class ControlLease {
 
   /** The current holder, after expiring a silent one. */
   current() {
-    if (this.holder && this.now() - this.holder.beat > this.timeoutMs) {
+    if (this.holder && this.awake() - this.holder.heard > this.timeoutMs) {
       const h = this.holder;
       this.#end(`the lease expired (no heartbeat reached the server in ${this.timeoutMs / 1000} s)`);
       this.onChange('expired', strip(h));
@@ -111,7 +117,7 @@ export class ControlLease {
     }
     const t = this.now();
     const same = h?.sid === s.sid;
-    this.holder = { username: s.username, role: s.role, sid: s.sid, since: same ? h.since : t, beat: t, resumedAt: same ? h.resumedAt : undefined };
+    this.holder = { username: s.username, role: s.role, sid: s.sid, since: same ? h.since : t, beat: t, heard: this.awake(), resumedAt: same ? h.resumedAt : undefined };
     this.#save();
     if (!same) this.onChange('taken', strip(s));
     return { ok: true };
@@ -120,7 +126,9 @@ export class ControlLease {
   /** @param {Holder} s */
   heartbeat(s) {
     if (!this.isHolder(s)) return false;
-    /** @type {any} */ (this.holder).beat = this.now();
+    const h = /** @type {NonNullable<typeof this.holder>} */ (this.holder);
+    h.beat = this.now();
+    h.heard = this.awake();
     this.#save();
     return true;
   }
