@@ -151,6 +151,11 @@ describe('ControlLease', () => {
     await step();
     expect(lease.kept).toBeNull(); // the same restart is told once
     expect(calls.filter((c) => c === 'controlHeartbeat')).toHaveLength(4);
+    answers.controlHeartbeat = ok({ holder: { ...ann, resumed_at: '2024-01-01T10:19:00.000Z' }, you: true });
+    await step();
+    expect(lease.kept).not.toBeNull(); // another restart
+    await lease.release();
+    expect(lease.kept).toBeNull(); // nothing kept any more once released
   });
 
   it('a server that restarts slower than the timeout: control reads lost, then kept when it answers that it gave it back', async () => {

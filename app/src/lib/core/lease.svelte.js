@@ -140,6 +140,7 @@ export class ControlLease {
     const wasYou = this.#you;
     // Stop heartbeating at once: even if the release does not reach the server, the lease ends in 2 s.
     this.you = false;
+    this.kept = null;
     if (wasYou) this.holder = null;
     this.#schedule();
     const r = await this.api.controlRelease();
