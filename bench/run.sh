@@ -18,7 +18,7 @@ declare -A WHAT=(
   [manual-iiwa]='manual motion on a ros_control arm, the iiwa cell: hold-to-run jog through the page'
   [sensors]='sensors page: six 100 Hz series on a phone, CPU throttled 4x'
   [backpressure]='BFF back-pressure: slow link, stalled reader, fast clients beside a stalled one'
-  [soak]='many clients through the BFF for minutes, RSS of the BFF and of rosbridge'
+  [soak]='25 clients through the BFF beside the simulated cell (camera viewer, jog session, running process) for minutes: RSS of every process, log errors, liveness'
 )
 declare -A FULL=(
   [rosbridge]='7 scenarios x 5 s' [relay]='3 x 5 s' [sim]='15 s' [manual]='5 runs each' [manual-iiwa]='5 runs each'
