@@ -9,7 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-NAMES=(rosbridge relay sim manual manual-iiwa sensors backpressure soak)
+read -r -a NAMES <<< 'rosbridge relay sim manual manual-iiwa sensors backpressure soak'
 declare -A WHAT=(
   [rosbridge]='rosbridge server (direct)'
   [relay]='BFF relay path'
@@ -30,14 +30,13 @@ declare -A QUICK=(
 )
 
 usage() {
-  cat <<EOF
-Usage: npm run bench -- [--quick] [NAME...] [soak options]
-  (no name)  every benchmark but the soak, full length (over 10 minutes; the figures of docs/performance.md)
-  --quick    each benchmark in a short form, same figures (with no name: those of the full run, < 5 min)
-  NAME...    only these benchmarks
-  soak options (after soak or --soak): --minutes N --clients N --rate HZ --json FILE
-Benchmarks:
-EOF
+  printf '%s\n' \
+    'Usage: npm run bench -- [--quick] [NAME...] [soak options]' \
+    '  (no name)  every benchmark but the soak, full length (over 10 minutes; the figures of docs/performance.md)' \
+    '  --quick    each benchmark in a short form, same figures (with no name: those of the full run, < 5 min)' \
+    '  NAME...    only these benchmarks' \
+    '  soak options (after soak or --soak): --minutes N --clients N --rate HZ --json FILE' \
+    'Benchmarks:'
   for n in "${NAMES[@]}"; do printf '  %-13s %s\n  %-13s full: %s; quick: %s\n' "$n" "${WHAT[$n]}" '' "${FULL[$n]}" "${QUICK[$n]}"; done
 }
 
@@ -103,7 +102,7 @@ for n in "${selected[@]}"; do
 done
 if ((${#selected[@]})); then
   echo
-  echo "== bench${tag}: $(awk -v a="$t_all" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.0f", b - a }') s in all (bootstrap not counted) =="
+  echo "== bench${tag}: $(awk -v a="$t_all" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.0f", b - a }') s in all, bootstrap not counted =="
   printf '%s\n' "${summary[@]}"
 fi
 if ((interrupted)); then exit 130; fi
