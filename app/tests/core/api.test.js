@@ -65,4 +65,28 @@ describe('api client', () => {
     ]);
     vi.unstubAllGlobals();
   });
+
+  it('a request that is not answered within its timeout is offline, saying so; without a timeout it waits', async () => {
+    /** @type {AbortSignal | undefined} */
+    let seen;
+    const hang = vi.fn((/** @type {any} */ _url, /** @type {RequestInit} */ init) => new Promise((_, reject) => {
+      seen = init.signal ?? undefined;
+      init.signal?.addEventListener('abort', () => reject(init.signal?.reason));
+    }));
+    const r = await request('POST', '/api/control/heartbeat', undefined, /** @type {any} */ (hang), 30);
+    expect(r).toEqual({ kind: 'offline', error: 'no answer within 0.03 s' });
+    expect(seen?.aborted).toBe(true);
+    await request('GET', '/api/config', undefined, respond(200, {}));
+    const f = respond(200, {});
+    await request('GET', '/api/config', undefined, f);
+    expect(f.mock.calls[0][1].signal).toBeUndefined();
+  });
+
+  it('the heartbeat passes its timeout on', async () => {
+    const f = respond(200, { holder: null, you: false });
+    vi.stubGlobal('fetch', f);
+    await api.controlHeartbeat(1000);
+    expect(f.mock.calls[0][1].signal).toBeInstanceOf(AbortSignal);
+    vi.unstubAllGlobals();
+  });
 });

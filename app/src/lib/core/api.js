@@ -18,9 +18,10 @@
  * @param {string} path  e.g. '/api/config'
  * @param {any} [body]   serialised as JSON when given
  * @param {typeof fetch} [fetchImpl]
+ * @param {number} [timeoutMs]  give up after this long (an answer that never comes is 'offline'); default: never
  * @returns {Promise<ApiResult>}
  */
-export async function request(method, path, body, fetchImpl = globalThis.fetch) {
+export async function request(method, path, body, fetchImpl = globalThis.fetch, timeoutMs = 0) {
   /** @type {RequestInit} */
   const init = {
     method,
@@ -32,11 +33,13 @@ export async function request(method, path, body, fetchImpl = globalThis.fetch) 
     init.headers = { ...init.headers, 'Content-Type': 'application/json' };
     init.body = JSON.stringify(body);
   }
+  if (timeoutMs > 0) init.signal = AbortSignal.timeout(timeoutMs);
   let res;
   try {
     res = await fetchImpl(path, init);
   } catch (e) {
-    // fetch only rejects on network failure (offline, server down, CORS): not an auth answer.
+    // fetch only rejects on network failure (offline, server down, CORS) or our timeout: not an auth answer.
+    if (e instanceof Error && e.name === 'TimeoutError') return { kind: 'offline', error: `no answer within ${timeoutMs / 1000} s` };
     return { kind: 'offline', error: e instanceof Error ? e.message : String(e) };
   }
   const data = await readJson(res);
@@ -70,6 +73,7 @@ export const api = {
   control: () => request('GET', '/api/control'),
   /** @param {{ force?: boolean }} [o] */
   controlTake: (o = {}) => request('POST', '/api/control/take', o.force ? { force: true } : undefined),
-  controlHeartbeat: () => request('POST', '/api/control/heartbeat'),
+  /** @param {number} [timeoutMs] */
+  controlHeartbeat: (timeoutMs) => request('POST', '/api/control/heartbeat', undefined, undefined, timeoutMs),
   controlRelease: () => request('POST', '/api/control/release'),
 };

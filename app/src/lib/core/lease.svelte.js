@@ -4,7 +4,8 @@
  * HTTP (BFF): GET /api/control -> {holder: {username, role, since} | null, you}; POST take [{force}]
  * -> view or 409 {error, holder}; POST heartbeat -> view or 409 {error, holder}; POST release -> 204.
  * The server drops a lease after 2 s without a heartbeat, so while we hold it we heartbeat every
- * 500 ms; otherwise, while someone shows the lease (watch()), we poll every 1.5 s.
+ * 500 ms; otherwise, while someone shows the lease (watch()), we poll every 1.5 s. A heartbeat gives up after
+ * half the timeout: one request that hangs (a stalled connection) must not hold back the next until the lease is gone.
  * Losing the lease (taken over, expired, server unreachable) leaves a notice in `lost` until dismissed
  * or control is taken again. A BFF that restarts within the timeout gives the lease back to its holder
  * (holder.resumed_at): that leaves a notice in `kept`; one that was back too late answers the heartbeat
@@ -61,6 +62,7 @@ export class ControlLease {
    * @param {number} [o.heartbeatMs]
    * @param {number} [o.pollMs]
    * @param {number} [o.timeoutMs]  the server's lease timeout
+   * @param {number} [o.heartbeatTimeoutMs]  how long one heartbeat may take (default: half the lease timeout)
    * @param {number} [o.reclaimMs]  how long to keep asking an unreachable server whether it kept our control
    * @param {() => number} [o.now]
    * @param {(fn: () => void, ms: number) => any} [o.setTimer]
@@ -72,6 +74,7 @@ export class ControlLease {
     this.heartbeatMs = o.heartbeatMs ?? 500;
     this.pollMs = o.pollMs ?? 1500;
     this.timeoutMs = o.timeoutMs ?? 2000;
+    this.heartbeatTimeoutMs = o.heartbeatTimeoutMs ?? this.timeoutMs / 2;
     this.reclaimMs = o.reclaimMs ?? 30_000;
     this.now = o.now ?? Date.now;
     this.setTimer = o.setTimer ?? ((fn, ms) => setTimeout(fn, ms));
@@ -223,7 +226,7 @@ export class ControlLease {
   async #heartbeat() {
     const epoch = this.#epoch;
     const reclaiming = !this.#you;
-    const r = await this.api.controlHeartbeat();
+    const r = await this.api.controlHeartbeat(this.heartbeatTimeoutMs);
     if (epoch !== this.#epoch || !(this.#you || this.#reclaiming())) return;
     if (r.kind === 'ok') {
       this.reachable = true;
