@@ -10,6 +10,11 @@ simulated devices there instead of on names of its own, so a cell file with othe
   (sim/cameras.py VIEWS, then the `simulation.views` of the cell); a stream without `view` gets viewpoint number
   i mod (number of viewpoints), i = its position.
 
+The optional `scene:` section (the UI's 3D view of the cell) names what the sim publishes for it: `scene.markers`,
+a visualization_msgs/MarkerArray topic with the parts and stations (sim/markers.py), and each `scene.arms[]` entry's
+`robot_description` parameter, which the UR sim sets to the simulated arm's URDF with the joint names of its motion
+group (parse_scene below; the ros_control sim's driver sets its group's own parameter).
+
 The optional `simulation:` section describes the world (arms with their base and tool, parts, stations, extra
 camera viewpoints: parse_simulation below, docs/sim.md); without it the sim builds the demo world (sim/scene.py).
 Other sensor types are not the sim's (nothing is published for them); a missing section means no such devices.
@@ -30,13 +35,14 @@ import yaml  # PyYAML: Debian's ROS packages bring it (python3-yaml)
 from .cameras import VIEWS
 from .scene import (DOOR_INPUT, ArmSpec, GripperSpec, PartsSpec, StationSpec, VacuumSpec, ViewSpec, WorldSpec,
                     default_world)
+from .urdf import ur_joint_names
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 WRENCH_TYPE = "geometry_msgs/WrenchStamped"
 TACTILE_TYPE = "cell_msgs/Scatter"
 # Topics the sim publishes whatever the cell says: a device declared there would clash with them. (/joint_states
 # is not the sim's: the robot driver publishes it from RTDE, as it would for a real UR.)
-RESERVED_TOPICS = ("/sim/faults",)
+RESERVED_TOPICS = ("/sim/faults", "/sim/objects")
 # What rospy accepts as a global name (rosgraph.names.is_legal_name, anchored): a bad one must not
 # surface as a ValueError from rospy.Publisher deep inside the bridge.
 _TOPIC = re.compile(r"/[A-Za-z][\w/]*", re.ASCII)
@@ -54,6 +60,33 @@ class Stream:
 
 
 @dataclass(frozen=True)
+class SceneArm:
+    """One `scene.arms[]` entry: a motion group the 3D view shows, the ROS parameter with its URDF, its base."""
+    group: str
+    robot_description: Optional[str] = None          # parameter name; None: the view takes the driver's own
+    base: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)   # x, y, z (m), yaw (deg): where the view puts it
+
+
+@dataclass(frozen=True)
+class ArmDescription:
+    """A robot_description parameter the UR sim sets: its arm's URDF (with its tool) under the joint names of the
+    arm's motion group, the names the robot driver publishes on /joint_states (sim/urdf.py ur_joint_names)."""
+    param: str
+    group: str
+    tool: str                                        # gripper or vacuum
+    joint_names: tuple[str, ...]                     # the six arm joints, UR order
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    markers: Optional[str] = None                    # visualization_msgs/MarkerArray topic (None: not published)
+    arms: tuple[SceneArm, ...] = ()
+    descriptions: tuple[ArmDescription, ...] = ()    # UR sim only: the parameters to set (a ros_control driver sets
+    #                                                  its own, manual.groups[].ros_control.robot_description)
+    warnings: tuple[str, ...] = ()                   # what would make the view disagree with the sim (logged)
+
+
+@dataclass(frozen=True)
 class CellDevices:
     path: Optional[str] = None
     wrench_topics: tuple[str, ...] = ()
@@ -63,6 +96,8 @@ class CellDevices:
     world: WorldSpec = field(default_factory=default_world)
     # The arm (group) whose wrist F/T each wrench topic carries, parallel to wrench_topics.
     wrench_groups: tuple[str, ...] = ()
+    # The cell file's `scene:` section (the 3D view): the markers topic, the URDF parameters.
+    scene: SceneSpec = field(default_factory=SceneSpec)
 
     @property
     def all_views(self) -> list[str]:
@@ -173,18 +208,114 @@ def devices_from(doc: Any, path: str = "<cell file>", views: Optional[Sequence[s
         name = entry.get("name")
         streams.append(Stream(name=name if isinstance(name, str) else topic, topic=topic, view=view))
 
+    scene = parse_scene(doc, world, path)
     devices = CellDevices(path=path, wrench_topics=tuple(by_type[WRENCH_TYPE]),
                           tactile_topics=tuple(by_type[TACTILE_TYPE]), streams=tuple(streams), world=world,
-                          wrench_groups=tuple(wrench_groups))
+                          wrench_groups=tuple(wrench_groups), scene=scene)
     # One topic, one type: rospy refuses a second publisher of another type on a topic.
     seen: dict[str, str] = {t: "the sim itself" for t in RESERVED_TOPICS}
     for kind, topics in (("wrench sensor", devices.wrench_topics), ("tactile sensor", devices.tactile_topics),
-                         ("video stream", [s.topic for s in devices.streams])):
+                         ("video stream", [s.topic for s in devices.streams]),
+                         ("scene.markers", [scene.markers] if scene.markers else [])):
         for topic in topics:
             if topic in seen:
                 raise bad(kind, f"{topic} is already used by {seen[topic]}")
             seen[topic] = f"a {kind}"
     return devices
+
+
+# ---------------------------------------------------------------------------------------------- scene section
+def parse_scene(doc: dict, world: WorldSpec, path: str = "<cell file>") -> SceneSpec:
+    """The cell file's `scene:` section as far as the sim uses it (absent: nothing to publish). Only what the sim
+    relies on is checked (the BFF validates the whole file against its schema): the markers topic and the parameter
+    names are global ROS names, each group a motion group once, each base [x, y, z, yaw_deg]; a UR arm's group joints
+    must name UR joints (they become the URDF's joint names)."""
+    def bad(where: str, what: str) -> CellFileError:
+        return CellFileError(f"cell file {path}: {where}: {what}")
+
+    def ros_name(value: Any, where: str, example: str) -> str:
+        if not isinstance(value, str) or not _TOPIC.fullmatch(value) or "//" in value or value.endswith("/"):
+            raise bad(where, f"expected a global ROS name like {example}, got {value!r}")
+        return value
+
+    section = doc.get("scene")
+    if section is None:
+        return SceneSpec()
+    if not isinstance(section, dict):
+        raise bad("scene", f"expected a mapping, got {section!r}")
+    markers = section.get("markers")
+    if markers is not None:
+        markers = ros_name(markers, "scene.markers", "/sim/parts")
+    manual = doc.get("manual")
+    groups = {g.get("name"): g for g in (manual.get("groups") or []) if isinstance(g, dict)} \
+        if isinstance(manual, dict) and isinstance(manual.get("groups"), list) else {}
+    entries = section.get("arms") or []
+    if not isinstance(entries, list):
+        raise bad("scene.arms", f"expected a list, got {entries!r}")
+    arms: list[SceneArm] = []
+    for i, entry in enumerate(entries):
+        where = f"scene.arms[{i}]"
+        if not isinstance(entry, dict):
+            raise bad(where, f"expected a mapping {{group, robot_description, base}}, got {entry!r}")
+        group = entry.get("group")
+        if not isinstance(group, str) or not group:
+            raise bad(f"{where}.group", f"expected the name of a motion group, got {group!r}")
+        if groups and group not in groups:
+            raise bad(f"{where}.group", f"{group!r} is not a motion group of manual.groups ({', '.join(groups)})")
+        if any(a.group == group for a in arms):
+            raise bad(f"{where}.group", f"{group!r} is already another arm's group")
+        param = entry.get("robot_description")
+        if param is not None:
+            param = ros_name(param, f"{where}.robot_description", "/robot_description")
+            other = next((a.group for a in arms if a.robot_description == param), None)
+            if other is not None:
+                raise bad(f"{where}.robot_description", f"{param} is already the parameter of group {other!r}")
+        base = entry.get("base", [0, 0, 0, 0])
+        if (not isinstance(base, list) or len(base) != 4
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in base)):
+            raise bad(f"{where}.base", f"expected [x, y, z, yaw_deg], got {base!r}")
+        arms.append(SceneArm(group, param, tuple(float(v) for v in base)))  # type: ignore[arg-type]
+
+    descriptions: list[ArmDescription] = []
+    warnings: list[str] = []
+    ros_control = {r.group: r for r in getattr(world, "robots", ())}   # sim/ros_control: its driver sets the param
+    order = list(groups)
+    for i, arm in enumerate(arms):
+        where = f"scene.arms[{i}]"
+        try:
+            sim_arm = world.arm(arm.group)
+        except KeyError:
+            if arm.robot_description:
+                warnings.append(f"{where}: group {arm.group!r} is no simulated arm (the sim's arms: "
+                                f"{', '.join(a.group for a in world.arms)}): nothing sets {arm.robot_description}")
+            continue
+        x, y, z = sim_arm.base
+        yaw_deg = math.degrees(sim_arm.yaw)
+        bx, by, bz, byaw = arm.base
+        turn = (byaw - yaw_deg + 180.0) % 360.0 - 180.0
+        if max(abs(bx - x), abs(by - y), abs(bz - z)) > 1e-6 or abs(turn) > 1e-6:
+            warnings.append(f"{where}.base: {list(arm.base)} but the simulated arm stands at "
+                            f"[{x:g}, {y:g}, {z:g}, {yaw_deg:g}] (simulation.arms): the 3D view would show it elsewhere")
+        if arm.group in ros_control:
+            driver_param = ros_control[arm.group].ros.robot_description
+            if arm.robot_description and arm.robot_description != driver_param:
+                warnings.append(f"{where}.robot_description: {arm.robot_description}, but the ros_control driver "
+                                f"sets {driver_param} (manual.groups[].ros_control.robot_description)")
+            continue
+        if not arm.robot_description:
+            continue
+        joints = groups.get(arm.group, {}).get("joints") or []
+        gwhere = f"manual.groups[{order.index(arm.group)}].joints" if arm.group in groups else where
+        if not isinstance(joints, list):
+            raise bad(gwhere, f"expected a list of joint names, got {joints!r}")
+        try:
+            names = ur_joint_names(joints)
+        except ValueError as e:
+            # The manual section's own check reports a bad joint name; here it only means no URDF is set.
+            warnings.append(f"{gwhere}: {e}: nothing sets {arm.robot_description}")
+            continue
+        descriptions.append(ArmDescription(arm.robot_description, arm.group, sim_arm.tool.kind, tuple(names)))
+    return SceneSpec(markers=markers, arms=tuple(arms), descriptions=tuple(descriptions), warnings=tuple(warnings))
 
 
 # ---------------------------------------------------------------------------------------------- simulation section

@@ -8,6 +8,11 @@ turn into alarms; the sim publishes no alarm list itself), /sim/objects (geometr
 creation order at OBJECTS_RATE, frame `base` when the only arm stands at the world origin, else `world`: ground truth
 for tests and the UI to see parts move; a real cell has no such topic) and the service /sim/trigger_fault
 (cell_msgs/TriggerFault).
+The 3D view (the cell file's `scene:` section, sim/cell_file.py parse_scene): on `scene.markers` a
+visualization_msgs/MarkerArray of the parts and stations (sim/markers.py, frame `world`) with every /sim/objects
+message; at start, for each simulated UR arm whose `scene.arms[]` entry names a `robot_description`, that parameter
+set to the arm's URDF (sim/urdf.py) under its motion group's joint names, as the UR bringup would on a real cell
+(the ros_control sim's driver sets its arm's own parameter: sim/ros_control/driver.py).
 No /joint_states: the arm is a UR controller, which speaks RTDE, not ROS; the cell's robot driver
 (cell_nodes manual_node) reads it over RTDE and is the only source of /joint_states, as with a real robot.
 """
@@ -18,12 +23,21 @@ import threading
 from typing import Optional
 
 from .cell_file import CellDevices, Stream
+from .markers import marker_array, part_boxes
 from .pacing import Pacer
 from .safety import Fault
+from .stations import station_boxes
+from .urdf import urdf_text
 
 log = logging.getLogger("sim.ros")
 
-OBJECTS_RATE = 5.0  # Hz, /sim/objects (wall time): enough to watch a part being carried, cheap on the physics lock
+OBJECTS_RATE = 5.0  # Hz, /sim/objects and the scene markers (wall time): enough to watch a part being carried,
+#                    cheap on the physics lock
+
+
+def robot_descriptions(devices: CellDevices) -> dict[str, str]:
+    """Parameter name -> URDF text of each simulated UR arm the cell file's scene section gives a robot_description."""
+    return {d.param: urdf_text(d.tool, d.joint_names) for d in devices.scene.descriptions}
 
 
 def ros_master_online() -> bool:
@@ -80,6 +94,23 @@ class RosBridge:
         arms = cell.world.arms
         self.objects_frame = "base" if len(arms) == 1 and arms[0].at_origin else "world"
         self.pub_objects = rospy.Publisher("/sim/objects", PoseArray, queue_size=2)
+        for warning in devices.scene.warnings:
+            log.warning("cell file %s: %s", devices.path, warning)
+        # What ur_description's bringup loads on a real cell: the arm's URDF, its joints named as the driver's.
+        for param, text in robot_descriptions(devices).items():
+            rospy.set_param(param, text)
+            log.info("URDF of the simulated arm on parameter %s", param)
+        self.pub_markers = None
+        if devices.scene.markers:
+            try:
+                from visualization_msgs.msg import MarkerArray
+            except ImportError as e:  # the rest of the ROS side still works
+                log.error("scene.markers %s: visualization_msgs not importable (%s): run scripts/bootstrap.sh apt",
+                          devices.scene.markers, e)
+            else:
+                self.pub_markers = rospy.Publisher(devices.scene.markers, MarkerArray, queue_size=2)
+                self._station_boxes = station_boxes(cell.world.spec)
+                self._part_size = cell.world.parts_spec.size
         self._types = dict(AlarmList=AlarmList, Scatter=Scatter, WrenchStamped=WrenchStamped,
                            CompressedImage=CompressedImage, Pose=Pose, PoseArray=PoseArray)
         self.service = rospy.Service("/sim/trigger_fault", TriggerFault, self._trigger_fault)
@@ -149,8 +180,9 @@ class RosBridge:
     def _publish_objects(self) -> None:
         with self.lock:  # the physics client is the controller loop's: read between two ticks
             poses = self.cell.world.body_poses()
+        stamp = self.rospy.Time.now()
         out = self._types["PoseArray"]()
-        out.header.stamp = self.rospy.Time.now()
+        out.header.stamp = stamp
         out.header.frame_id = self.objects_frame
         for (x, y, z), (qx, qy, qz, qw) in poses:
             m = self._types["Pose"]()
@@ -159,6 +191,8 @@ class RosBridge:
             o.x, o.y, o.z, o.w = float(qx), float(qy), float(qz), float(qw)
             out.poses.append(m)
         self.pub_objects.publish(out)
+        if self.pub_markers is not None and self.pub_markers.get_num_connections() > 0:
+            self.pub_markers.publish(marker_array(part_boxes(poses, self._part_size), self._station_boxes, stamp))
 
     def watched_views(self) -> set[str]:
         """Viewpoints shown by at least one stream whose image topic has a subscriber right now."""

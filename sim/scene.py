@@ -69,6 +69,11 @@ class PartsSpec:
         return len(self.positions) if self.positions is not None else self.count
 
 
+# Part i's colour is PART_COLORS[i % len(PART_COLORS)] (rendered and in the scene markers alike).
+PART_COLORS = [(0.85, 0.15, 0.15, 1), (0.15, 0.7, 0.2, 1), (0.2, 0.3, 0.9, 1), (0.9, 0.75, 0.1, 1),
+               (0.6, 0.2, 0.7, 1), (0.1, 0.7, 0.75, 1)]
+
+
 @dataclass(frozen=True)
 class StationSpec:
     """A flat `stand` (a box whose top is at `height`) or a `fixture` (a plate with walled pockets).

@@ -9,7 +9,8 @@ from __future__ import annotations
 import math
 import os
 import tempfile
-from typing import Optional
+from typing import Optional, Sequence
+from xml.sax.saxutils import quoteattr
 
 from . import kinematics as kin
 
@@ -69,9 +70,40 @@ def _joint_disk(radius: float) -> str:
     return f'<visual><origin xyz="0 0 0"/>{geo}<material name="ur_blue"/></visual>'
 
 
-def urdf_text(tool: str = "gripper") -> str:
+def ur_joint_names(group_joints: Sequence[str]) -> list[str]:
+    """The names a UR arm's six joints have on /joint_states, from its motion group's `joints` (cell file
+    manual.groups[].joints), as our robot driver names them (cell_nodes manual config.plan_arms): a group joint is the
+    robot joint its name ends with (`left_elbow_joint` -> elbow_joint), in any order; a robot joint the group does not
+    name gets the prefix of the group's first joint + its UR name. No joints: the UR names (ARM_JOINTS).
+    ValueError when a name ends with no UR joint name or two names are the same robot joint."""
+    named: dict[int, str] = {}
+    for name in group_joints:
+        index = next((i for i, j in enumerate(ARM_JOINTS) if isinstance(name, str) and name.endswith(j)), None)
+        if index is None:
+            raise ValueError(f"{name!r} is not a joint of the UR arm (a joint name ends with one of "
+                             f"{', '.join(ARM_JOINTS)})")
+        if index in named:
+            raise ValueError(f"{name!r} is the same robot joint ({ARM_JOINTS[index]}) as {named[index]!r}")
+        named[index] = name
+    if not named:
+        return list(ARM_JOINTS)
+    first = group_joints[0]
+    prefix = first[:len(first) - len(ARM_JOINTS[next(i for i, n in named.items() if n == first)])]
+    return [named.get(i, prefix + j) for i, j in enumerate(ARM_JOINTS)]
+
+
+def urdf_text(tool: str = "gripper", joint_names: Optional[Sequence[str]] = None) -> str:
+    """The arm's URDF. `joint_names`: the six revolute arm joints' names, in ARM_JOINTS order (default ARM_JOINTS:
+    what the physics loads); the robot_description parameter uses the names the robot driver publishes
+    (ur_joint_names). Links and the tool's joints keep their names."""
     if tool not in TOOLS:
         raise ValueError(f"unknown tool {tool!r}")
+    names = list(ARM_JOINTS) if joint_names is None else [str(n) for n in joint_names]
+    if len(names) != len(ARM_JOINTS) or len(set(names)) != len(names) or not all(names):
+        raise ValueError(f"expected {len(ARM_JOINTS)} different joint names, got {joint_names!r}")
+    others = set(FINGER_JOINTS) | {FT_JOINT, "flange_joint", "gripper_mount", "vacuum_mount", "cup_mount"}
+    if others & set(names):
+        raise ValueError(f"joint names {sorted(others & set(names))} are the tool's")
     parts = ['<?xml version="1.0"?>', '<robot name="ur5_cell_arm">',
              '<material name="ur_grey"><color rgba="0.75 0.75 0.78 1"/></material>',
              '<material name="ur_blue"><color rgba="0.2 0.45 0.75 1"/></material>',
@@ -87,7 +119,7 @@ def urdf_text(tool: str = "gripper") -> str:
         x_next, z_next = kin.A[i], kin.D[i]
         parts.append(f'<link name="{link}">{_inertial(_MASSES[i])}{_joint_disk(_RADII[i])}'
                      f'{_segment(x_next, z_next, _RADII[i] * 0.8, "ur_grey")}</link>')
-        parts.append(f'<joint name="{ARM_JOINTS[i]}" type="revolute"><parent link="{parent}"/><child link="{link}"/>'
+        parts.append(f'<joint name={quoteattr(names[i])} type="revolute"><parent link="{parent}"/><child link="{link}"/>'
                      f'<origin xyz="{origin[0]:.6f} 0 {origin[1]:.6f}" rpy="{origin[2]:.9f} 0 0"/>'
                      f'<axis xyz="0 0 1"/><limit lower="{-kin.JOINT_LIMIT:.6f}" upper="{kin.JOINT_LIMIT:.6f}" '
                      f'effort="330" velocity="3.15"/><dynamics damping="0.0" friction="0.0"/></joint>')

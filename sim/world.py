@@ -1,8 +1,9 @@
 """The physical cell in PyBullet: UR5 arms (each with an F/T sensor and a gripper or a vacuum tool), a table,
 graspable cubes, stations (fixtures with pockets, flat stands).
 
-What is built comes from a WorldSpec (sim/scene.py; the cell file's `simulation:` section). The default is the demo
-world: one arm at the origin with the two-finger gripper, three cubes from the seed, a three-pocket fixture.
+What is built comes from a WorldSpec (sim/scene.py; the cell file's `simulation:` section; the stations' geometry:
+sim/stations.py, shared with the scene markers). The default is the demo world: one arm at the origin with the
+two-finger gripper, three cubes from the seed, a three-pocket fixture.
 One World owns one PyBullet client (DIRECT, headless): every arm of the cell lives in this one physics world (a part
 handed over from one arm to the other is in both their reach), stepped once per controller tick.
 The same construction code builds the render-only replica used by the camera process.
@@ -19,7 +20,8 @@ import pybullet
 from pybullet_utils import bullet_client
 
 from . import urdf
-from .scene import DEFAULT_WORLD, ArmSpec, PartsSpec, StationSpec, WorldSpec, yaw_quaternion
+from .scene import DEFAULT_WORLD, PART_COLORS, ArmSpec, PartsSpec, StationSpec, WorldSpec, yaw_quaternion
+from .stations import station_shape
 
 PHYSICS_HZ = 500          # fixed physics step; also the controller tick (UR e-Series runs at 500 Hz)
 DT = 1.0 / PHYSICS_HZ
@@ -31,10 +33,6 @@ CUBE_MASS = 0.1
 TABLE_SIZE = (1.4, 1.2, 0.04)
 FIXTURE_POS = (-0.35, 0.35)
 TACTILE_TAXELS = 8
-POCKET_CLEARANCE = 0.008  # a pocket is this much wider than a part
-FIXTURE_WALL = 0.01
-FIXTURE_WALL_HEIGHT = 0.015
-FIXTURE_PLATE = 0.006     # plate thickness: a part resting in a pocket has its bottom here
 # Vacuum: a part is sucked on when its face is within VACUUM_REACH of the cup face (or up to VACUUM_PRESS into it,
 # pressed), its centre within VACUUM_CENTRE of the cup axis and that face square to the cup within VACUUM_TILT.
 VACUUM_REACH = 0.005
@@ -42,8 +40,6 @@ VACUUM_PRESS = 0.003
 VACUUM_CENTRE = 0.012
 VACUUM_TILT = math.radians(15)
 VACUUM_FORCE = 40.0       # N the suction holds with (a held 0.1 kg cube needs 1 N; a collision tears it off less)
-PART_COLORS = [(0.85, 0.15, 0.15, 1), (0.15, 0.7, 0.2, 1), (0.2, 0.3, 0.9, 1), (0.9, 0.75, 0.1, 1),
-               (0.6, 0.2, 0.7, 1), (0.1, 0.7, 0.75, 1)]
 
 
 @dataclass
@@ -360,79 +356,25 @@ class World:
         return cubes
 
     def _build_stand(self, st: StationSpec) -> int:
-        half = (st.size[0] / 2, st.size[1] / 2, st.height / 2)
-        return self._box((st.position[0], st.position[1], st.height / 2), half, (0.45, 0.5, 0.55, 1), mass=0,
-                         orn=yaw_quaternion(st.yaw))
+        shape = station_shape(st, self.spec.parts.size)
+        return self._box(shape.base_pos, shape.halves[0], shape.rgba, mass=0, orn=shape.base_orn)
 
     def _build_fixture(self, st: StationSpec) -> tuple[int, list[tuple[float, float]]]:
-        """A plate with square pockets (walls 1.5 cm high) that take one part each."""
-        if isinstance(st.pockets, int):
-            return self._build_fixture_row(st)
-        return self._build_fixture_free(st)
-
-    def _build_fixture_row(self, st: StationSpec) -> tuple[int, list[tuple[float, float]]]:
-        """N pockets in a row along the station's y axis, centred on its position (the demo's fixture)."""
+        """A plate with square pockets (walls 1.5 cm high) that take one part each (sim/stations.py: a row of N
+        pockets along the station's y axis, or one walled pocket at each given world position on a common plate)."""
         p = self.p
-        n = st.pockets
-        pocket = self.spec.parts.size + POCKET_CLEARANCE
-        wall = FIXTURE_WALL
-        h = FIXTURE_WALL_HEIGHT
-        halves, positions = [], []
-        halves.append((0.1, (n * pocket + (n + 1) * wall) / 2, 0.003))
-        positions.append((0, 0, 0.003))
-        span = n * pocket + (n + 1) * wall
-        for sx in (-1, 1):  # long walls
-            halves.append((wall / 2, span / 2, h / 2))
-            positions.append((sx * (pocket / 2 + wall / 2), 0, 0.006 + h / 2))
-        for k in range(n + 1):  # cross walls between pockets
-            y = -span / 2 + wall / 2 + k * (pocket + wall)
-            halves.append((pocket / 2 + wall, wall / 2, h / 2))
-            positions.append((0, y, 0.006 + h / 2))
-        col = p.createCollisionShapeArray([pybullet.GEOM_BOX] * len(halves), halfExtents=halves,
-                                          collisionFramePositions=positions)
-        vis = p.createVisualShapeArray([pybullet.GEOM_BOX] * len(halves), halfExtents=halves,
-                                       visualFramePositions=positions, rgbaColors=[(0.6, 0.6, 0.65, 1)] * len(halves))
-        px, py = st.position
+        shape = station_shape(st, self.spec.parts.size)
+        n = len(shape.halves)
+        frames = {} if shape.orns is None else {"collisionFrameOrientations": list(shape.orns)}
+        col = p.createCollisionShapeArray([pybullet.GEOM_BOX] * n, halfExtents=list(shape.halves),
+                                          collisionFramePositions=list(shape.positions), **frames)
+        vis_frames = {} if shape.orns is None else {"visualFrameOrientations": list(shape.orns)}
+        vis = p.createVisualShapeArray([pybullet.GEOM_BOX] * n, halfExtents=list(shape.halves),
+                                       visualFramePositions=list(shape.positions), rgbaColors=[shape.rgba] * n,
+                                       **vis_frames)
         body = p.createMultiBody(baseMass=0, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
-                                 basePosition=(px, py, 0), baseOrientation=yaw_quaternion(st.yaw))
-        if st.yaw == 0.0:
-            slots = [(px, py - span / 2 + wall + pocket / 2 + k * (pocket + wall)) for k in range(n)]
-        else:
-            c, s = math.cos(st.yaw), math.sin(st.yaw)
-            local = [-span / 2 + wall + pocket / 2 + k * (pocket + wall) for k in range(n)]
-            slots = [(px - s * ly, py + c * ly) for ly in local]
-        return body, slots
-
-    def _build_fixture_free(self, st: StationSpec) -> tuple[int, list[tuple[float, float]]]:
-        """One walled pocket at each given world position (turned by the station's yaw) on a common plate."""
-        p = self.p
-        pocket = self.spec.parts.size + POCKET_CLEARANCE
-        wall, h = FIXTURE_WALL, FIXTURE_WALL_HEIGHT
-        pts = np.array(st.pockets, dtype=float)
-        centre = (pts.min(axis=0) + pts.max(axis=0)) / 2
-        reach = pocket / 2 + wall + 0.01
-        plate_half = tuple((pts.max(axis=0) - pts.min(axis=0)) / 2 + reach)
-        halves = [(plate_half[0], plate_half[1], FIXTURE_PLATE / 2)]
-        positions = [(0.0, 0.0, FIXTURE_PLATE / 2)]
-        orns = [(0.0, 0.0, 0.0, 1.0)]
-        c, s = math.cos(st.yaw), math.sin(st.yaw)
-        q = yaw_quaternion(st.yaw)
-        for x, y in pts - centre:
-            for lx, ly, hx, hy in ((pocket / 2 + wall / 2, 0, wall / 2, pocket / 2 + wall),
-                                   (-pocket / 2 - wall / 2, 0, wall / 2, pocket / 2 + wall),
-                                   (0, pocket / 2 + wall / 2, pocket / 2, wall / 2),
-                                   (0, -pocket / 2 - wall / 2, pocket / 2, wall / 2)):
-                halves.append((hx, hy, h / 2))
-                positions.append((x + c * lx - s * ly, y + s * lx + c * ly, FIXTURE_PLATE + h / 2))
-                orns.append(q)
-        col = p.createCollisionShapeArray([pybullet.GEOM_BOX] * len(halves), halfExtents=halves,
-                                          collisionFramePositions=positions, collisionFrameOrientations=orns)
-        vis = p.createVisualShapeArray([pybullet.GEOM_BOX] * len(halves), halfExtents=halves,
-                                       visualFramePositions=positions, visualFrameOrientations=orns,
-                                       rgbaColors=[(0.6, 0.6, 0.65, 1)] * len(halves))
-        body = p.createMultiBody(baseMass=0, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
-                                 basePosition=(float(centre[0]), float(centre[1]), 0))
-        return body, [(float(x), float(y)) for x, y in pts]
+                                 basePosition=shape.base_pos, baseOrientation=shape.base_orn)
+        return body, list(shape.slots)
 
     # ---- the demo's single arm (and tests written for it) ------------------------------------
     @property

@@ -22,6 +22,7 @@ from cell_msgs.srv import TriggerFault
 from geometry_msgs.msg import PoseArray, WrenchStamped
 from PIL import Image
 from sensor_msgs.msg import CompressedImage
+from visualization_msgs.msg import Marker, MarkerArray
 
 from conftest import wait_for
 
@@ -33,6 +34,7 @@ STREAMS = {"/robot2/overview/compressed": "global", "/robot2/overview2/compresse
            "/robot2/bench/compressed": "workbench"}
 WRENCH_TOPICS = ("/robot2/ft_sensor/wrench", "/robot2/ft_sensor/wrench_copy")
 TACTILE_TOPIC = "/robot2/finger/tactile"
+MARKERS_TOPIC = "/robot2/scene/parts"   # the cell file's scene.markers
 # What the sim published before the cell file named its topics; the demo cell still uses these names.
 OLD_TOPICS = ("/cell/wrench", "/cell/tactile", "/cell/alarms", "/cell/camera/workbench/image/compressed",
               "/cell/camera/global/image/compressed")
@@ -103,7 +105,7 @@ def _sim_publications() -> dict[str, str]:
 
 @pytest.mark.parametrize("cell, expected", [
     (RENAMED, {**{t: "geometry_msgs/WrenchStamped" for t in WRENCH_TOPICS},
-               TACTILE_TOPIC: "cell_msgs/Scatter",
+               TACTILE_TOPIC: "cell_msgs/Scatter", MARKERS_TOPIC: "visualization_msgs/MarkerArray",
                **{t: "sensor_msgs/CompressedImage" for t in STREAMS}}),
     (CELLS / "no-devices.yaml", {}),
 ], ids=["renamed-topics", "no-devices"])
@@ -196,6 +198,52 @@ def test_object_poses_on_sim_objects(ros_cell):
         q = (pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
         assert abs(abs(sum(a * b for a, b in zip(q, orn))) - 1) < 1e-3  # same orientation (q or -q)
     objects.sub.unregister()
+
+
+def test_scene_markers_and_the_arms_robot_description(ros_cell):
+    """The cell file's scene section: the parts and stations as a MarkerArray (frame world, ~5 Hz, the cubes where
+    the seed put them) and the arm's URDF on its parameter, the revolute joints named as manual.groups names them."""
+    import xml.etree.ElementTree as ET
+    from sim.scene import PART_COLORS
+    from sim.world import World
+    markers = Recorder(MARKERS_TOPIC, MarkerArray)
+    wait_for(lambda: len(markers.msgs) >= 8, 10, what="8 marker arrays")
+    # Never faster than the 5 Hz it is paced at (slower under a loaded host is no fault of the sim).
+    assert markers.rate(skip=1) <= 6.5, f"{MARKERS_TOPIC} at {markers.rate(skip=1):.1f} Hz, expected ~5 Hz"
+    msg = markers.msgs[-1]
+    parts = [m for m in msg.markers if m.ns == "parts"]
+    stations = [m for m in msg.markers if m.ns == "stations"]
+    assert len(parts) + len(stations) == len(msg.markers)
+    assert [m.id for m in parts] == [0, 1, 2] and [m.id for m in stations] == list(range(7))  # the demo fixture
+    assert {m.text for m in stations} == {"fixture"}
+    for m in msg.markers:
+        assert m.header.frame_id == "world" and m.header.stamp.to_sec() > 0
+        assert m.type == Marker.CUBE and m.action == Marker.ADD
+    replica = World(seed=0)  # the sim's default seed: same placement
+    try:
+        expected = replica.body_poses()
+    finally:
+        replica.close()
+    for m, (pos, orn), color in zip(parts, expected, PART_COLORS):
+        got = (m.pose.position.x, m.pose.position.y, m.pose.position.z)
+        assert max(abs(a - b) for a, b in zip(got, pos)) < 0.002, (got, pos)
+        q = (m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w)
+        assert abs(abs(sum(a * b for a, b in zip(q, orn))) - 1) < 1e-3
+        assert (m.scale.x, m.scale.y, m.scale.z) == (0.04, 0.04, 0.04)
+        assert (m.color.r, m.color.g, m.color.b, m.color.a) == pytest.approx(color)
+    plate = stations[0]
+    assert (plate.pose.position.x, plate.pose.position.y) == pytest.approx((-0.35, 0.35))
+    markers.sub.unregister()
+
+    text = rospy.get_param("/robot2/robot_description")
+    root = ET.fromstring(text.split("?>", 1)[1])
+    revolute = [j.get("name") for j in root.findall("joint") if j.get("type") == "revolute"]
+    assert revolute == ["r2_shoulder_pan_joint", "r2_shoulder_lift_joint", "r2_elbow_joint", "r2_wrist_1_joint",
+                        "r2_wrist_2_joint", "r2_wrist_3_joint"]
+    # Only the parameter the cell file names: an arm's URDF at another name would be another sim's (the roscore is
+    # shared with other tests), never this one's renamed joints.
+    other = rospy.get_param("/robot_description", "")
+    assert "r2_shoulder_pan_joint" not in other
 
 
 def _active(rec: Recorder) -> set[str]:

@@ -30,6 +30,7 @@ from sensor_msgs.msg import CompressedImage, JointState
 from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from visualization_msgs.msg import MarkerArray
 
 from conftest import wait_for  # the repository's conftest (it also gives the roscore fixture)
 from sim.tests.conftest import SimProcess
@@ -139,6 +140,12 @@ def test_the_driver_interface_is_published_under_the_cell_files_names(iiwa):
     assert objects.header.frame_id == "base"
     assert [round(p.position.y, 3) for p in objects.poses] == [-0.2, -0.1, 0.0]
     assert all(abs(p.position.z - 0.02) < 0.001 for p in objects.poses)
+    # The cell file's scene.markers: the parts (frame world) and the fixture's plate and pocket walls.
+    markers = Latest("/r7/scene/parts", MarkerArray).wait(lambda m: True, 5, "the scene markers")
+    parts = [m for m in markers.markers if m.ns == "parts"]
+    assert [round(m.pose.position.y, 3) for m in parts] == [-0.2, -0.1, 0.0] and [m.id for m in parts] == [0, 1, 2]
+    assert all(m.header.frame_id == "world" and m.type == m.CUBE and m.scale.x == 0.04 for m in parts)
+    assert [m.text for m in markers.markers if m.ns == "stations"] == ["output"] * 13  # plate + 4 walls x 3 pockets
     faults = Latest("/sim/faults", AlarmList).wait(lambda m: True, 5, "the latched faults")
     assert {a.id for a in faults.alarms} == {"collision", "vacuum_fault"} and not any(a.active for a in faults.alarms)
     image = Latest("/r7/camera/overview/compressed", CompressedImage).wait(lambda m: True, 30, "a camera frame")

@@ -10,6 +10,7 @@ describe('routing from the feature list', () => {
       ['modules', '/modules'],
       ['process', '/process'],
       ['manual', '/manual'],
+      ['scene', '/scene'],
       ['sensors', '/sensors'],
       ['video', '/video'],
       ['parameters', '/parameters'],

@@ -4,6 +4,7 @@ import home from './home/index.js';
 import modules from './modules/index.js';
 import process from './process/index.js';
 import manual from './manual/index.js';
+import scene from './scene/index.js';
 import sensors from './sensors/index.js';
 import video from './video/index.js';
 import parameters from './parameters/index.js';
@@ -13,4 +14,4 @@ import database from './database/index.js';
 import system from './system/index.js';
 
 /** @type {import('../core/features/feature.js').Feature[]} */
-export const FEATURES = [home, modules, process, manual, sensors, video, parameters, routines, alarms, database, system];
+export const FEATURES = [home, modules, process, manual, scene, sensors, video, parameters, routines, alarms, database, system];

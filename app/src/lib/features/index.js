@@ -10,6 +10,7 @@
 import homeIcon from './home/icon.js';
 import modulesIcon from './modules/icon.js';
 import manualIcon from './manual/icon.js';
+import sceneIcon from './scene/icon.js';
 import sensorsIcon from './sensors/icon.js';
 import videoIcon from './video/icon.js';
 import processIcon from './process/icon.js';
@@ -47,6 +48,7 @@ export const features = [
   { id: 'modules', path: '/modules', title: 'Modules', icon: modulesIcon, load: () => import('./modules/Page.svelte') },
   { id: 'process', path: '/process', title: 'Process', icon: processIcon, load: () => import('./process/Page.svelte') },
   { id: 'manual', path: '/manual', title: 'Manual motion', icon: manualIcon, load: () => import('./manual/Page.svelte') },
+  { id: 'scene', path: '/scene', title: '3D view', icon: sceneIcon, load: () => import('./scene/Page.svelte') },
   { id: 'sensors', path: '/sensors', title: 'Sensors', icon: sensorsIcon, load: () => import('./sensors/Page.svelte') },
   { id: 'video', path: '/video', title: 'Cameras', icon: videoIcon, load: () => import('./video/Page.svelte') },
   { id: 'parameters', path: '/parameters', title: 'Parameters', icon: parametersIcon, load: () => import('./parameters/Page.svelte') },

@@ -21,9 +21,10 @@ export default defineFeature({
   schema: featureSchema('manual'),
   view: (section) => section,
   // Every arm publishes its own joints on /joint_states (the cell file's joint names) and each group its own state.
+  // preview_move only computes where a move would go (the 3D view's ghost) and moves nothing: a read, no lease.
   reads: (section) => ({
     subscribe: ['/joint_states', ...groupNames(section).flatMap((g) => [stateTopic(g), tcpPoseTopic(g)])],
-    call_service: ['/cell/manual/groups', '/cell/manual/get_pose'],
+    call_service: ['/cell/manual/groups', '/cell/manual/get_pose', '/cell/manual/preview_move'],
   }),
   commands: () => ({ publish: ['/cell/manual/jog'], call_service: MOVES }),
   motion: () => ({ publish: ['/cell/manual/jog'], call_service: MOVES }),

@@ -15,8 +15,8 @@ import yaml
 
 from cell_nodes.manual import frames
 from cell_nodes.manual.cell_driver import CellDriver
-from cell_nodes.manual.config import (ConfigError, DigitalOut, MoveNamedStep, Wait, WaitInput, parse_manual, plan_arms,
-                                      resolve_hosts, ur_joint_index)
+from cell_nodes.manual.config import (UR_JOINTS, ConfigError, DigitalOut, MoveNamedStep, Wait, WaitInput, parse_manual,
+                                      plan_arms, resolve_hosts, ur_joint_index)
 from cell_nodes.manual.controller import CallTimeout, Gate, fk_lever
 from cell_nodes.manual.driver import DriverState, ManualDriver, Snapshot
 from cell_nodes.manual.jog import Decision, Jog, JogSupervisor
@@ -242,6 +242,8 @@ class FakeRobot:
         self.reachable = True
         self.connected = True
         self.ik_ok = True
+        self.joint_limit = 2 * math.pi  # what isJointsWithinSafetyLimits allows, rad
+        self.controls = 0          # control clients made (each uploads the control script)
         self.di = 1
         self.do = 0
         self.ts = 0.0
@@ -310,7 +312,8 @@ class FakeControl:
         kind, target = self.r.pending
         if kind == "q":
             self.r.q = target
-        else:
+        else:  # a moveL ends where the controller's IK from the start joints says
+            self.r.q = fake_ik(target, self.r.q)
             self.r.pose = target
         self.r.pending = None
         return 0
@@ -343,11 +346,28 @@ class FakeControl:
         self._rec("ik", list(x))
         return self.r.ik_ok
 
+    def getInverseKinematics(self, x, qnear, max_position_error, max_orientation_error):
+        self._rec("getInverseKinematics", list(x), list(qnear))
+        assert self.r.ik_ok, "get_inverse_kin without a solution ends the control script"
+        return fake_ik(x, qnear)
+
+    def isJointsWithinSafetyLimits(self, q):
+        self._rec("isJointsWithinSafetyLimits", list(q))
+        return all(abs(v) <= self.r.joint_limit for v in q)
+
     def getForwardKinematics(self, q, tcp_offset):
         # the base joint turns the TCP on a 0.5 m circle
         return [0.5 * math.cos(q[0]), 0.5 * math.sin(q[0]), 0.4, 0.0, math.pi, 0.0]
 
     def getTCPOffset(self): return [0, 0, 0.125, 0, 0, 0]
+
+
+def fake_ik(pose, qnear) -> list[float]:
+    """The fake controller's IK: a solution near qnear that depends on the pose (the base joint points at it)."""
+    q = list(qnear)
+    q[0] = math.atan2(pose[1], pose[0])
+    q[1] = qnear[1] - (pose[2] - 0.43)
+    return q
 
 
 class FakeIO:
@@ -384,6 +404,7 @@ class FakeConnector:
 
     def control(self, host):
         self._check()
+        self.r.controls += 1
         return FakeControl(self.r)
 
     def dashboard(self, host):
@@ -694,6 +715,163 @@ def test_groups_service_content(driver: ManualDriver) -> None:
                                 "jog_timeout": 0.2}
 
 
+# ---------------------------------------------------------------------------------------------- the move preview
+PICK = demo_section()["groups"][0]["configurations"]["pick_approach"]
+
+
+@pytest.fixture
+def idle_robot(robot: FakeRobot) -> FakeRobot:
+    """No program runs on the controller (as a fresh UR): the driver's control script starts on first use."""
+    robot.runtime = 1
+    return robot
+
+
+def test_preview_of_each_kind_is_the_target_the_move_then_commands(idle_robot: FakeRobot) -> None:
+    robot = idle_robot
+    d = make_driver(robot)
+    assert d.connect()
+    # named: the configuration, the TCP there from the controller's FK; the move sends exactly those joints
+    ok, message, names, q, tcp = d.preview_move("arm", "named", "pick_approach")
+    assert (ok, message, names) == (True, "pick_approach is reachable", list(UR_JOINTS))
+    assert q == PICK and tcp == pytest.approx([0.5 * math.cos(PICK[0]), 0.5 * math.sin(PICK[0]), 0.4, 0, math.pi, 0])
+    assert robot.moves("isJointsWithinSafetyLimits")[-1] == ("isJointsWithinSafetyLimits", PICK)
+    assert not robot.moves("moveJ")
+    assert d.move_named("arm", "pick_approach") == (True, "arrived at pick_approach")
+    assert robot.moves("moveJ")[-1][1] == q
+    # relative: from the current TCP pose; its joints are the controller's IK seeded with the current joints, and the
+    # arm ends there (the fake controller's moveL ends at its IK from the start joints, as a real one does)
+    start_q, start_pose = list(robot.q), list(robot.pose)
+    ok, message, names, q, tcp = d.preview_move("arm", "relative", offset=[0, 0, 0.05, 0, 0, 0.2], frame="tool")
+    assert (ok, message) == (True, "the relative target is reachable")
+    assert tcp == pytest.approx(frames.relative_target(start_pose, [0, 0, 0.05, 0, 0, 0.2], "tool"))
+    assert robot.moves("getInverseKinematics")[-1] == ("getInverseKinematics", tcp, start_q)
+    assert q == fake_ik(tcp, start_q) and q != start_q
+    assert d.move_relative("arm", [0, 0, 0.05, 0, 0, 0.2], "tool") == (True, "arrived at the relative target")
+    assert robot.moves("moveL")[-1][1] == tcp          # the move commands the previewed pose
+    assert robot.q == q and robot.pose == tcp           # and ends at the previewed joints
+    # pose: as given, base frame
+    pose = [0.2, -0.4, 0.3, 0.0, math.pi, 0.0]
+    ok, message, names, q, tcp = d.preview_move("arm", "pose", pose=pose)
+    assert (ok, message, tcp, q) == (True, "the pose target is reachable", pose, fake_ik(pose, robot.q))
+    assert d.move_pose("arm", pose) == (True, "arrived at the pose target")
+    assert robot.q == q
+
+
+def test_the_preview_moves_nothing_claims_nothing_and_answers_while_a_move_runs(idle_robot: FakeRobot) -> None:
+    robot = idle_robot
+    d = ManualDriver(parse_manual(demo_section()), "10.0.0.5", FakeConnector(robot),
+                     Limits.from_section(demo_section()))  # the real clock: two threads
+    assert d.connect()
+    assert d.preview_move("arm", "relative", offset=[0, 0, 0.05, 0, 0, 0], frame="base")[0]
+    assert d.state().motion == "idle" and d.state().message == "connected to the robot controller at 10.0.0.5"
+    motion = ("moveJ", "moveL", "speedJ", "speedL", "stopJ", "stopL", "speedStop")
+    assert not [c for c in robot.calls if c[0] in motion]
+    robot.hold = True
+    result: dict = {}
+    mover = threading.Thread(target=lambda: result.setdefault("r", d.move_named("arm", "pick_approach")))
+    mover.start()
+    wait_for(lambda: robot.moves("moveJ"), 5, what="the move sent")
+    for request in (("named", "home"), ("relative", "", [0, 0, 0.02, 0, 0, 0], "base"), ("pose", "", (), "", robot.pose)):
+        ok, message, _, q, tcp = d.preview_move("arm", *request)
+        assert ok, message
+        assert len(q) == 6 and len(tcp) == 6
+    s = d.state()
+    assert (s.motion, s.motion_target) == ("moving", "pick_approach")  # the running move keeps the arm
+    assert len(robot.moves("moveJ")) == 1 and not robot.moves("moveL") and not robot.moves("stopJ")
+    robot.hold = False
+    mover.join(5)
+    assert result["r"] == (True, "arrived at pick_approach")
+
+
+def test_an_unreachable_target_is_refused_with_the_moves_own_words(idle_robot: FakeRobot) -> None:
+    robot = idle_robot
+    d = make_driver(robot)
+    assert d.connect()
+    robot.ik_ok = False
+    far = [2.0, 0, 0, 0, 0, 0]
+    preview = d.preview_move("arm", "pose", pose=far)
+    assert preview == (False, "pose unreachable: no inverse kinematics solution", [], [], [])
+    assert d.move_pose("arm", far) == (False, preview[1])
+    assert d.preview_move("arm", "relative", offset=[0, 0, 0.5, 0, 0, 0], frame="base")[:2] == (False, preview[1])
+    assert not robot.moves("getInverseKinematics")  # never asked without a solution (it would end the script)
+    robot.ik_ok = True
+    robot.joint_limit = 1.0  # the controller's safety limits refuse pick_approach's elbow (1.6 rad)
+    refusal = "configuration pick_approach is outside the robot's safety limits (joint limits, safety planes or reach)"
+    assert d.preview_move("arm", "named", "pick_approach") == (False, refusal, [], [], [])
+    assert d.move_named("arm", "pick_approach") == (False, refusal)
+    assert not robot.moves("moveJ") and not robot.moves("moveL") and d.state().motion == "idle"
+
+
+@pytest.mark.parametrize("preview, move, message", [
+    (("legs", "named", "home"), ("move_named", "legs", "home"), "unknown motion group 'legs' (the cell has: arm)"),
+    (("arm", "named", "dance"), ("move_named", "arm", "dance"),
+     "unknown configuration 'dance' for group arm (it has: home, pick_approach)"),
+    (("arm", "relative", "", [0, 0, 0.05], "base"), ("move_relative", "arm", [0, 0, 0.05], "base"),
+     "offset must be 6 numbers (x, y, z in m, rx, ry, rz in rad), got 3"),
+    (("arm", "relative", "", [0, 0, math.nan, 0, 0, 0], "base"), ("move_relative", "arm", [0, 0, math.nan, 0, 0, 0],
+                                                                  "base"),
+     "offset must be 6 numbers (x, y, z in m, rx, ry, rz in rad), got nan for z"),
+    (("arm", "relative", "", [0] * 6, "world"), ("move_relative", "arm", [0] * 6, "world"),
+     "unknown frame 'world' (base or tool)"),
+    (("arm", "pose", "", (), "", [0.1] * 7), ("move_pose", "arm", [0.1] * 7),
+     "pose must be 6 numbers (x, y, z in m, rx, ry, rz in rad), got 7"),
+    (("arm", "pose", "", (), "", [0.1, 0.2, 0.3, math.inf, 0, 0]), ("move_pose", "arm", [0.1, 0.2, 0.3, math.inf, 0, 0]),
+     "pose must be 6 numbers (x, y, z in m, rx, ry, rz in rad), got inf for rx"),
+    (("arm", "pose", "", (), "", []), ("move_pose", "arm", []),
+     "pose must be 6 numbers (x, y, z in m, rx, ry, rz in rad), got 0"),
+    (("arm", "jump", "home"), None, "unknown move kind 'jump' (named, relative or pose)"),
+    (("arm", "", "home"), None, "unknown move kind '' (named, relative or pose)"),
+])
+def test_bad_preview_requests_are_refused_as_the_move_refuses_them(robot: FakeRobot, driver: ManualDriver,
+                                                                   preview: tuple, move: Optional[tuple],
+                                                                   message: str) -> None:
+    assert driver.preview_move(*preview) == (False, message, [], [], [])
+    if move is not None:
+        assert getattr(driver, move[0])(*move[1:]) == (False, message)
+    assert robot.calls == [] and robot.controls == 0  # nothing asked of the controller
+
+
+def test_the_preview_refuses_as_the_move_when_the_arm_cannot_move(robot: FakeRobot, driver: ManualDriver) -> None:
+    robot.robot_mode, robot.safety_mode = 7, 3
+    driver.poll()
+    assert driver.preview_move("arm", "named", "home") == (False, "protective stop is active: clear it first", [], [],
+                                                          [])
+    robot.reachable = robot.connected = False
+    driver.poll()
+    assert driver.preview_move("arm", "named", "home")[:2] == (False, "robot controller at 10.0.0.5 is unreachable")
+    assert robot.calls == []
+
+
+def test_the_preview_never_takes_the_controller_from_another_program(robot: FakeRobot, driver: ManualDriver) -> None:
+    """A program runs on the controller (the fake's default) and the driver has no control client yet: making one
+    would upload the control script and end that program, so the preview says so; a move does take over."""
+    assert driver.snapshot().program_running
+    assert driver.preview_move("arm", "named", "home") == (
+        False, "another program runs on the robot controller: a preview does not take it over (a move would stop it)",
+        [], [], [])
+    assert robot.controls == 0
+    assert driver.move_named("arm", "home") == (True, "arrived at home")
+    assert robot.controls == 1
+    assert driver.preview_move("arm", "named", "pick_approach")[:4] == (True, "pick_approach is reachable",
+                                                                       list(UR_JOINTS), PICK)
+    assert robot.controls == 1
+
+
+def test_a_tool_step_moves_to_the_target_the_preview_shows(idle_robot: FakeRobot) -> None:
+    section = demo_section()
+    section["tools"].append({"name": "changer", "actions": [{"name": "park", "steps": [
+        {"move_named": "pick_approach", "group": "arm"}]}]})
+    d = make_driver(idle_robot, section)
+    assert d.connect()
+    q = d.preview_move("arm", "named", "pick_approach")[3]
+    assert d.tool_action("changer", "park") == (True, "changer park done")
+    assert idle_robot.moves("moveJ")[-1][1] == q
+    idle_robot.joint_limit = 1.0
+    assert d.tool_action("changer", "park") == (
+        False, "changer park: configuration pick_approach is outside the robot's safety limits (joint limits, safety "
+               "planes or reach)")
+
+
 # ---------------------------------------------------------------------------------------------- hosts and arms
 TWIN_JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
                "wrist_3_joint")
@@ -846,6 +1024,10 @@ class FakeArm:
     def move_pose(self, group, pose, speed=0.0, acceleration=0.0): return self._rec("move_pose", group, tuple(pose))
     def tool_action(self, tool, action): return self._rec("tool", tool, action)
 
+    def preview_move(self, group, kind, name="", offset=(), frame="", pose=()):
+        self.calls.append(("preview_move", group, kind, name, tuple(offset), frame, tuple(pose)))
+        return True, f"preview on {self.host}", [f"{group}_joint"], [0.5], [0.1] * 6
+
     def stop(self, wait: bool = True) -> tuple[bool, str]:
         self.calls.append(("stop",))
         time.sleep(self.stop_delay)
@@ -901,6 +1083,20 @@ def test_unknown_names_are_refused_with_the_cells_names_and_reach_no_arm() -> No
     assert left.calls[-1] == right.calls[-1] == ("jog", "middle", 0)
     with pytest.raises(KeyError):
         cell.state("middle")
+
+
+def test_the_move_preview_goes_to_the_groups_arm() -> None:
+    cell, left, right = fake_cell()
+    assert cell.preview_move("right", "relative", "", [0, 0, 0.1, 0, 0, 0], "tool") == (
+        True, "preview on 127.0.2.2", ["right_joint"], [0.5], [0.1] * 6)
+    assert cell.preview_move("left", "named", "home")[1] == "preview on 127.0.2.1"
+    assert cell.preview_move("right", "pose", pose=[0.2] * 6)[0]
+    assert left.calls == [("preview_move", "left", "named", "home", (), "", ())]
+    assert right.calls == [("preview_move", "right", "relative", "", (0, 0, 0.1, 0, 0, 0), "tool", ()),
+                           ("preview_move", "right", "pose", "", (), "", (0.2,) * 6)]
+    assert cell.preview_move("middle", "named", "home") == (
+        False, "unknown motion group 'middle' (the cell has: left, right)", [], [], [])
+    assert len(left.calls) == 1 and len(right.calls) == 2  # reached no arm
 
 
 def test_jog_goes_to_its_groups_arm_only() -> None:
@@ -975,8 +1171,13 @@ def test_two_real_drivers_move_their_own_robot(robot: FakeRobot) -> None:
     left, right = cell.drivers
     assert left.connect() and right.connect()
     assert right.joint_names[0] == "right_shoulder_pan_joint" and left.joint_names[5] == "left_wrist_3_joint"
+    other.runtime = 1  # no program runs yet on the right arm's controller: its preview may start the control script
+    right.poll()
+    ok, _, names, q, _ = cell.preview_move("right", "named", "out")
+    assert ok and names == [f"right_{j}" for j in TWIN_JOINTS] and q == twin_section()["groups"][1]["configurations"]["out"]
     assert cell.move_named("right", "out") == (True, "arrived at out")
     assert other.moves("moveJ") and not robot.moves("moveJ")
+    assert other.moves("moveJ")[-1][1] == q
     assert cell.tool_action("vacuum", "on") == (True, "vacuum on done")
     assert other.moves("setStandardDigitalOut") == [("setStandardDigitalOut", 4, True)]
     assert not robot.moves("setStandardDigitalOut")

@@ -125,3 +125,18 @@ def test_services_topics_and_a_jog_through_ros(node) -> None:
     for rec in (joints, state, pose):
         rec.sub.unregister()
     assert not math.isnan(joints.msg.position[0])
+
+
+def test_preview_move_through_ros(node) -> None:
+    """/cell/manual/preview_move: a named configuration's target is the cell file's values, nothing moves."""
+    import yaml
+    from cell_msgs.srv import PreviewMove
+
+    configs = yaml.safe_load(CELL.read_text())["manual"]["groups"][0]["configurations"]
+    preview = rospy.ServiceProxy("/cell/manual/preview_move", PreviewMove)
+    r = preview(group="arm", kind="named", name="pick_approach")
+    assert (r.reachable, r.message, list(r.joint_names)) == (True, "pick_approach is reachable", UR_JOINTS)
+    assert list(r.positions) == configs["pick_approach"] and len(r.tcp_pose) == 6
+    r = preview(group="arm", kind="jump")
+    assert (r.reachable, r.message, list(r.positions)) == (False, "unknown move kind 'jump' (named, relative or pose)",
+                                                          [])

@@ -17,7 +17,7 @@ import rtde_receive
 import yaml
 
 from cell_nodes.manual import frames
-from cell_nodes.manual.config import parse_manual
+from cell_nodes.manual.config import UR_JOINTS, parse_manual
 from cell_nodes.manual.controller import UrRtdeConnector
 from cell_nodes.manual.driver import ManualDriver
 from cell_nodes.manual.limits import Limits
@@ -122,6 +122,48 @@ def test_unreachable_pose_is_refused_and_the_arm_does_not_move(cell) -> None:
     assert watch.getRuntimeState() == 2  # the control script still runs: no runtime error on the controller
     ok, why = driver.move_relative("arm", [0.02, 0, 0, 0, 0, 0], "base")  # and the next move works
     assert ok, why
+
+
+def test_the_preview_through_ur_rtde_is_where_the_moves_go(cell) -> None:
+    """The move preview against the controller through the unmodified ur_rtde client (the emulated controller answers
+    getInverseKinematics, isJointsWithinSafetyLimits and getForwardKinematics): a named configuration and the TCP
+    there, a relative move that ends at the previewed joints, an unreachable pose refused with the move's words, and
+    an answer while a move runs (which it leaves alone)."""
+    driver, watch = cell
+    go_home(driver)
+    ok, message, names, q, tcp = driver.preview_move("arm", "named", "pick_approach")
+    assert (ok, message, names, q) == (True, "pick_approach is reachable", list(UR_JOINTS), CONFIGS["pick_approach"])
+    assert driver.move_named("arm", "pick_approach", 1.0, 1.5) == (True, "arrived at pick_approach")
+    d, a = frames.pose_distance(watch.getActualTCPPose(), tcp)
+    assert d < 0.001 and a < 0.005, f"the TCP ended {d * 1000:.2f} mm, {a:.4f} rad from the previewed pose"
+
+    go_home(driver)
+    offset = [0.03, -0.02, 0.04, 0.0, 0.0, 0.3]
+    ok, message, _, q, tcp = driver.preview_move("arm", "relative", offset=offset, frame="tool")
+    assert (ok, message) == (True, "the relative target is reachable")
+    assert np.max(np.abs(np.array(q) - CONFIGS["home"])) > 0.05   # the joints do change
+    assert driver.move_relative("arm", offset, "tool", 0.1, 0.5) == (True, "arrived at the relative target")
+    err = float(np.max(np.abs(q_of(watch) - q)))
+    print(f"\nrelative move: the arm ended {err * 1000:.3f} mrad from the previewed joints")
+    assert err < 0.005
+    d, a = frames.pose_distance(watch.getActualTCPPose(), tcp)
+    assert d < 0.001 and a < 0.005
+
+    far = list(watch.getActualTCPPose())
+    far[0] += 3.0
+    assert driver.preview_move("arm", "pose", pose=far) == (
+        False, "pose unreachable: no inverse kinematics solution", [], [], [])
+    assert watch.getRuntimeState() == 2  # never asked for an IK without a solution: the control script still runs
+
+    result: dict = {}
+    mover = threading.Thread(target=lambda: result.setdefault("r", driver.move_named("arm", "home", 0.5, 1.0)))
+    mover.start()
+    wait_for(lambda: speed_of(watch) > 0.2, 5, interval=0.005, what="the arm moving")
+    ok, message, _, q, _ = driver.preview_move("arm", "relative", offset=[0, 0, 0.02, 0, 0, 0], frame="base")
+    assert ok, message
+    assert driver.state().motion == "moving" and driver.state().motion_target == "home"
+    mover.join(10)
+    assert result["r"] == (True, "arrived at home")
 
 
 def _jog_then(driver: ManualDriver, watch, seconds: float, jog: tuple, sample: Callable[[], None] | None = None

@@ -3,6 +3,8 @@
 so the motion-safety rules are shown to hold on this backend too."""
 from __future__ import annotations
 
+import copy
+import math
 import os
 import threading
 import time
@@ -11,6 +13,7 @@ from typing import Callable, Optional, Sequence
 import pybullet_data
 import pytest
 
+from cell_nodes.manual import frames
 from cell_nodes.manual.config import RosControlSpec, parse_manual, plan_arms
 from cell_nodes.manual.driver import ManualDriver, Refused
 from cell_nodes.manual.limits import TCP_SPEED_CAP, Limits
@@ -287,9 +290,8 @@ SECTION = {"groups": [{"name": "arm", "joints": JOINTS, "driver": "ros_control",
                                                                               {"wait_input": 1, "value": True}]}]}]}
 
 
-@pytest.fixture
-def driver(fake):
-    config = parse_manual(SECTION)
+def start_driver(fake: FakeDriver, section: dict = SECTION) -> ManualDriver:
+    config = parse_manual(section)
     (arm,) = plan_arms(config, {})
     assert arm.ros_control is not None and arm.joint_names == tuple(JOINTS)
     limits = Limits.from_section(config.limits, 0.2)
@@ -298,6 +300,12 @@ def driver(fake):
                      limits, joint_names=arm.joint_names, poll_rate=100.0, retry_s=0.1)
     d.start()
     wait_for(lambda: d.connected and d.snapshot().robot_mode == "RUNNING")  # connected, and polled once
+    return d
+
+
+@pytest.fixture
+def driver(fake):
+    d = start_driver(fake)
     yield d
     d.shutdown()
 
@@ -335,3 +343,85 @@ def test_the_driver_refuses_when_joint_states_stop(driver, fake):
     assert not ok and "unreachable" in message
     # The reconnection attempts say why.
     wait_for(lambda: "no joint states on /iiwa/joint_states" in driver.state().message, timeout=3.0)
+
+
+# ---------------------------------------------------------------------------------------------- the move preview on it
+READY = SECTION["groups"][0]["configurations"]["ready"]
+
+
+def q_of(fake: FakeDriver) -> list[float]:
+    return [fake.q[j] for j in JOINTS]
+
+
+def test_the_preview_of_a_relative_move_is_where_the_move_ends(driver, fake):
+    """Same start, same planning (trajectory.linear_path, the waypoints' IK): the previewed joints are the last point
+    of the trajectory the move then sends, and where the arm ends."""
+    kin = load_kinematics(SPEC, JOINTS, iiwa_urdf())
+    offset = [0.0, 0.05, -0.05, 0.0, 0.0, 0.2]
+    start = q_of(fake)
+    ok, message, names, q, tcp = driver.preview_move("arm", "relative", offset=offset, frame="tool")
+    assert (ok, message, names) == (True, "the relative target is reachable", JOINTS)
+    d, a = frames.pose_distance(tcp, frames.relative_target(kin.fk(start), offset, "tool"))
+    assert d < 1e-9 and a < 1e-9                    # the relative target from the current TCP pose
+    d, a = frames.pose_distance(kin.fk(q), tcp)
+    assert d < 1e-5 and a < 1e-4                    # the joints reach it
+    assert fake.goals == [] and driver.state().motion == "idle"
+    assert driver.move_relative("arm", offset, "tool") == (True, "arrived at the relative target")
+    (_, points, _), = fake.goals
+    assert points[-1].positions == pytest.approx(q, abs=1e-9)
+    assert q_of(fake) == pytest.approx(q, abs=1e-9)
+
+
+def test_the_preview_of_a_named_configuration_and_of_a_pose(driver, fake):
+    kin = load_kinematics(SPEC, JOINTS, iiwa_urdf())
+    ok, message, names, q, tcp = driver.preview_move("arm", "named", "ready")
+    assert (ok, message, names, q) == (True, "ready is reachable", JOINTS, READY)
+    assert tcp == pytest.approx(kin.fk(READY))
+    pose = kin.fk([0.2, 0.6, 0.0, -1.2, 0.0, 1.1, 0.0])
+    ok, message, _, q, tcp = driver.preview_move("arm", "pose", pose=pose)
+    assert (ok, message, tcp) == (True, "the pose target is reachable", pose)
+    assert driver.move_pose("arm", pose) == (True, "arrived at the pose target")
+    assert q_of(fake) == pytest.approx(q, abs=1e-9)
+
+
+def test_a_target_out_of_reach_or_limits_is_refused_with_the_moves_own_words(fake):
+    section = copy.deepcopy(SECTION)
+    section["groups"][0]["configurations"]["stretched"] = [0.0, 2.5, 0.0, -1.4, 0.0, 1.2, 0.0]
+    d = start_driver(fake, section)
+    try:
+        # a joint target outside the URDF's limits: the backend's own moveJ check, named by the joint
+        preview = d.preview_move("arm", "named", "stretched")
+        assert preview[0] is False and preview[1].startswith("joint iiwa_joint_2: target 2.500 rad is outside its "
+                                                              "limits")
+        assert d.move_named("arm", "stretched") == (False, preview[1])
+        # no IK solution at all
+        far = [2.0, 0.0, 0.4, 0.0, math.pi, 0.0]
+        assert d.preview_move("arm", "pose", pose=far) == (False, "pose unreachable: no inverse kinematics solution",
+                                                            [], [], [])
+        assert d.move_pose("arm", far) == (False, "pose unreachable: no inverse kinematics solution")
+        # reachable as a pose, but the straight line there drives joint 6 into its limit: the linear move's planning
+        upright = d.snapshot().tcp_pose[:3] + (0.0, 0.0, 0.0)
+        preview = d.preview_move("arm", "pose", pose=upright)
+        assert preview[0] is False and preview[1].startswith("joint limit: iiwa_joint_6 would pass its limit")
+        assert d.move_pose("arm", upright) == (False, preview[1])
+        assert fake.goals == [] and d.state().motion == "idle"
+    finally:
+        d.shutdown()
+
+
+def test_the_preview_answers_while_a_move_runs(driver, fake):
+    pending: list[Callable[[int, int, str], None]] = []
+    fake.finish = pending.append   # the goal stays active until the test ends it
+    result: dict = {}
+    mover = threading.Thread(target=lambda: result.setdefault("r", driver.move_named("arm", "ready")))
+    mover.start()
+    wait_for(lambda: pending)
+    ok, message, _, q, _ = driver.preview_move("arm", "relative", offset=[0, 0, 0.03, 0, 0, 0], frame="base")
+    assert ok, message
+    assert driver.preview_move("arm", "named", "home")[:4] == (True, "home is reachable", JOINTS, HOME)
+    s = driver.state()
+    assert (s.motion, s.motion_target) == ("moving", "ready") and len(fake.goals) == 1 and fake.cancels == 0
+    fake.q.update(zip(JOINTS, READY))
+    pending.pop()(SUCCEEDED, 0, "")
+    mover.join(5)
+    assert result["r"] == (True, "arrived at ready")

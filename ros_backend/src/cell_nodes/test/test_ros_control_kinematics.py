@@ -20,7 +20,8 @@ from cell_nodes.manual import frames
 from cell_nodes.manual.limits import TCP_SPEED_CAP
 from cell_nodes.manual.ros_control.kinematics import Kinematics, KinematicsError
 from cell_nodes.manual.ros_control.trajectory import (MAX_STEP, MAX_STEP_ANGLE, TrajectoryError, TrajectoryPoint,
-                                                      jog_joint_velocities, jog_point, joint_move, linear_move)
+                                                      jog_joint_velocities, jog_point, joint_move, linear_move,
+                                                      linear_path)
 from sim import kinematics as ur_kin
 from sim import urdf as ur_urdf
 
@@ -340,6 +341,25 @@ def test_linear_move_is_straight_and_under_the_tcp_cap(kin):
             assert speed <= cap + 1e-9
             assert _distance_to_segment(np.array(kin.fk(q)[:3]), a, b)[0] < 0.0005
     assert top > 0.9 * cap          # it does go (nearly) as fast as allowed
+
+
+def test_linear_path_is_the_waypoints_linear_move_times(kin):
+    """linear_path is what a linear move's target joints come from (the move preview): its last row is exactly where
+    linear_move's trajectory ends, whatever the speeds; no motion is the start alone; it refuses as linear_move."""
+    target = list(kin.fk(HOME))
+    target[1] += 0.1
+    target[2] -= 0.05
+    target[5] += 0.3
+    path = linear_path(kin, HOME, target)
+    assert path.qs[0] == pytest.approx(HOME) and path.length == pytest.approx(math.hypot(0.1, 0.05))
+    for speed, joint_speed in ((0.25, 2.0), (0.05, 0.2)):
+        assert linear_move(kin, HOME, target, speed, 1.0, joint_speed)[-1].positions == pytest.approx(path.qs[-1],
+                                                                                                    abs=0)
+    assert kin.pose_error(path.qs[-1], target)[0] < 1e-5
+    assert len(linear_path(kin, HOME, kin.fk(HOME)).qs) == 1
+    upright = kin.fk(HOME)[:3] + [0.0, 0.0, 0.0]
+    with pytest.raises(TrajectoryError, match=r"^joint limit: iiwa_joint_6 would pass its limit"):
+        linear_path(kin, HOME, upright)
 
 
 def test_linear_move_orientation_by_slerp(kin):

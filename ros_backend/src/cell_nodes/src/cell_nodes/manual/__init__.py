@@ -6,7 +6,8 @@
 - frames: rotation vectors, poses, relative offsets and jog twists in the base or the tool frame
 - jog: the hold-to-run supervisor (heartbeat timeout, stop on direction 0, replace, never queue)
 - controller: the ur_rtde interfaces behind a small protocol, and the gate every call goes through
-- driver: moves, jogs, tool actions, stop, state and reconnection of one arm against that protocol
+- driver: moves (and their preview: one target computation, move_target), jogs, tool actions, stop, state and
+  reconnection of one arm against that protocol
 - cell_driver: one driver per arm; routes requests by group (tools by their group), stops every arm, state per group
 
 The rospy node (cell_nodes/scripts/manual_node) only wires these to topics and services.

@@ -2,8 +2,9 @@
 services and topics to them. No ROS here: the node (scripts/manual_node) calls these methods and publishes what
 the callbacks report; the tests use fake drivers.
 
-- a request that names a group goes to the driver of that group's arm; a tool action to the driver of the tool's
-  group; a name no arm has is refused with the cell's names, as a single driver refuses it;
+- a request that names a group (moves, their preview, get_pose, jogs) goes to the driver of that group's arm; a tool
+  action to the driver of the tool's group; a name no arm has is refused with the cell's names, as a single driver
+  refuses it;
 - stop asks every arm at once (in parallel) and answers after all of them answered;
 - a jog goes to its group's arm (each driver keeps its own dead-man timeout); a jog naming no group of the cell is
   refused on every arm (a running jog stops: never carry on after a bad command);
@@ -39,6 +40,8 @@ class ArmDriver(Protocol):
                       acceleration: float = 0.0) -> tuple[bool, str]: ...
     def move_pose(self, group: str, pose: Sequence[float], speed: float = 0.0,
                   acceleration: float = 0.0) -> tuple[bool, str]: ...
+    def preview_move(self, group: str, kind: str, name: str = "", offset: Sequence[float] = (), frame: str = "",
+                     pose: Sequence[float] = ()) -> tuple[bool, str, list[str], list[float], list[float]]: ...
     def tool_action(self, tool: str, action: str) -> tuple[bool, str]: ...
     def stop(self, wait: bool = True) -> tuple[bool, str]: ...
     def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base") -> None: ...
@@ -145,6 +148,15 @@ class CellDriver:
                   acceleration: float = 0.0) -> tuple[bool, str]:
         d = self.driver_of(group)
         return (False, self._unknown_group(group)) if d is None else d.move_pose(group, pose, speed, acceleration)
+
+    def preview_move(self, group: str, kind: str, name: str = "", offset: Sequence[float] = (), frame: str = "",
+                     pose: Sequence[float] = ()) -> tuple[bool, str, list[str], list[float], list[float]]:
+        """Where a move of the group would take its arm (ManualDriver.preview_move): (reachable, message, joint
+        names, joint positions, TCP pose)."""
+        d = self.driver_of(group)
+        if d is None:
+            return False, self._unknown_group(group), [], [], []
+        return d.preview_move(group, kind, name, offset, frame, pose)
 
     def tool_action(self, tool: str, action: str) -> tuple[bool, str]:
         d = self.driver_of_tool(tool)

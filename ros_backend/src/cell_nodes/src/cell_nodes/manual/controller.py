@@ -54,11 +54,18 @@ class ControlInterface(Protocol):
     def getAsyncOperationProgress(self) -> int: ...
     def getInverseKinematicsHasSolution(self, x: list[float], qnear: list[float], max_position_error: float,
                                         max_orientation_error: float) -> bool: ...
+    def getInverseKinematics(self, x: list[float], qnear: list[float], max_position_error: float,
+                             max_orientation_error: float) -> list[float]: ...
+    def isJointsWithinSafetyLimits(self, q: list[float]) -> bool: ...
     def getForwardKinematics(self, q: list[float], tcp_offset: list[float]) -> list[float]: ...
     def getTCPOffset(self) -> list[float]: ...
     # Optional (the ros_control backend has it, ur_rtde does not): why the last move ended early, "" if it did not
     # (an aborted or rejected trajectory goal, with the controller's error code and text).
     # def getMoveError(self) -> str: ...
+    # Optional (the ros_control backend has them): a move's target as the backend's own moves compute it, used
+    # instead of getInverseKinematics / isJointsWithinSafetyLimits (driver.ManualDriver.move_target):
+    # def getLinearMoveTarget(self, pose: list[float], qnear: list[float]) -> list[float]: ...  (where moveL ends)
+    # def getJointLimitError(self, q: list[float]) -> str: ...  (why moveJ would refuse q, "" when it would not)
 
 
 class ReceiveInterface(Protocol):
@@ -95,7 +102,11 @@ class DashboardInterface(Protocol):
 
 
 class Connector(Protocol):
-    """Makes the clients for a host; each raises (RuntimeError) when the controller cannot be reached."""
+    """Makes the clients for a host; each raises (RuntimeError) when the controller cannot be reached.
+
+    Optional attribute `control_takes_over` (default True): making the control client starts a program on the
+    controller that ends any other program running there (ur_rtde uploads its control script). Calls that only
+    read (the move preview) then never make it while another program runs."""
 
     def receive(self, host: str) -> ReceiveInterface: ...
     def io(self, host: str) -> IOInterface: ...
@@ -105,6 +116,8 @@ class Connector(Protocol):
 
 class UrRtdeConnector:
     """The real thing: the unmodified ur_rtde pip package."""
+
+    control_takes_over = True   # RTDEControlInterface uploads its script: another running program ends
 
     def receive(self, host: str) -> ReceiveInterface:
         import rtde_receive

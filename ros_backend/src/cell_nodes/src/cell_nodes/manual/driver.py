@@ -11,6 +11,10 @@ Threads and locks:
   completion without holding either lock;
 - the monitor thread polls the robot state (`poll_rate`) and reconnects every `retry_s` when the controller is
   lost; the watchdog thread stops a jog whose heartbeats stopped.
+
+Targets: every move service (and a tool's move_named step) and the move preview compute where the arm goes with one
+function, move_target (validation, the relative target from the current TCP pose, the IK and the joint-limit check
+the move relies on), so the 3D view's ghost is exactly what the move then commands.
 """
 from __future__ import annotations
 
@@ -40,6 +44,8 @@ ANGLE_TOLERANCE = 0.005     # rad
 POLL_S = 0.01               # how often a waiting service call looks at the robot
 STALE_S = 1.0               # RTDE data that stopped changing this long means the controller is gone
 MOVABLE_SAFETY = ("NORMAL", "REDUCED")
+NAMED, RELATIVE, POSE = "named", "relative", "pose"   # the kinds of move (MoveRequest.kind)
+AXES = ("x", "y", "z", "rx", "ry", "rz")
 
 
 class Refused(Exception):
@@ -91,6 +97,33 @@ class DriverState:
     fault: str = ""                 # the controller ended the last move early (aborted trajectory); "" when none
 
 
+@dataclass(frozen=True)
+class MoveRequest:
+    """A move as the services ask for it: move_named, move_relative, move_pose, and preview_move for any of them."""
+    kind: str                               # named, relative or pose
+    group: str
+    name: str = ""                          # named: the configuration
+    offset: tuple[float, ...] = ()          # relative: x, y, z (m), rx, ry, rz (rad)
+    frame: str = "base"                     # relative: base or tool ("" means base)
+    pose: tuple[float, ...] = ()            # pose: x, y, z (m), rx, ry, rz (rad), base frame
+
+    @property
+    def label(self) -> str:
+        """The state's motion_target while it runs: the configuration, "relative" or "pose"."""
+        return self.name if self.kind == NAMED else self.kind
+
+
+@dataclass(frozen=True)
+class MoveTarget:
+    """Where a move takes the arm (ManualDriver.move_target): what the move commands, what the preview shows."""
+    group: Group
+    request: MoveRequest
+    start: Snapshot                         # the reading the target was computed from
+    q: tuple[float, ...]                    # rad, every joint of the arm: moveJ's target, or where moveL ends
+    tcp_pose: tuple[float, ...]             # the TCP there (m, rotation vector, base frame): moveL's target
+    linear: bool                            # a straight TCP line (moveL: relative, pose), else a joint move (moveJ)
+
+
 def read_snapshot(recv: ReceiveInterface) -> Snapshot:
     """All the state one poll needs, in one gate call."""
     return Snapshot(connected=bool(recv.isConnected()), timestamp=float(recv.getTimestamp()),
@@ -106,6 +139,16 @@ def read_snapshot(recv: ReceiveInterface) -> Snapshot:
 
 def _finite(values: Sequence[float]) -> bool:
     return all(isinstance(v, (int, float)) and math.isfinite(v) for v in values)
+
+
+def _six(values: Sequence[float], what: str) -> None:
+    """Refused unless `values` are 6 finite numbers (an offset or a pose); the message names what is wrong."""
+    form = f"{what} must be 6 numbers (x, y, z in m, rx, ry, rz in rad)"
+    if len(values) != 6:
+        raise Refused(f"{form}, got {len(values)}")
+    for axis, v in zip(AXES, values):
+        if not _finite([v]):
+            raise Refused(f"{form}, got {v!r} for {axis}")
 
 
 class ManualDriver:
@@ -252,9 +295,11 @@ class ManualDriver:
             except Exception as e:
                 log.debug("disconnect: %s", e)
 
-    def _control(self) -> ControlInterface:
+    def _control(self, take_over: bool = True) -> ControlInterface:
         """The control client with its script running: made on first use, the script re-uploaded after it stopped
-        (a protective stop or a runtime error ends it). Raises Refused when that cannot be done."""
+        (a protective stop or a runtime error ends it). Raises Refused when that cannot be done.
+        take_over=False (calls that only read): never make it while another program runs on the controller, since
+        starting the control script would end that program (the connector's `control_takes_over`)."""
         with self._connect_lock:
             ctl = self._ctl
             if ctl is not None and not self._call(ctl.isConnected):
@@ -263,6 +308,10 @@ class ManualDriver:
             if ctl is None:
                 if not self._connected:
                     raise Refused(self._unreachable())
+                if not take_over and self._snap.program_running and \
+                        getattr(self._connector, "control_takes_over", True):
+                    raise Refused("another program runs on the robot controller: a preview does not take it over "
+                                  "(a move would stop it)")
                 try:
                     ctl = run_with_timeout(lambda: self._connector.control(self.host), 10.0, "ur-control")
                 except Exception as e:
@@ -492,53 +541,113 @@ class ManualDriver:
         return True, f"pose of {g.name}", [s.q[i] for i in g.indices], list(s.tcp_pose)
 
     def move_named(self, group: str, name: str, speed: float = 0.0, acceleration: float = 0.0) -> tuple[bool, str]:
-        try:
-            g = self.find_group(group)
-            if name not in g.configurations:
-                raise Refused(f"unknown configuration {name!r} for group {g.name} "
-                              f"(it has: {', '.join(g.configurations) or 'none'})")
-            token = self._claim(MOVING, g.name, name)
-        except Refused as e:
-            return False, str(e)
-        try:
-            return self._succeed(token, self._joint_move(token, g, name, self.limits.joint_speed(speed),
-                                                         self.limits.joint_acceleration(acceleration)))
-        except Refused as e:
-            return self._fail(token, str(e))
+        return self._move(MoveRequest(NAMED, group, name=name), self.limits.joint_speed(speed),
+                          self.limits.joint_acceleration(acceleration))
 
     def move_relative(self, group: str, offset: Sequence[float], frame: str, speed: float = 0.0,
                       acceleration: float = 0.0) -> tuple[bool, str]:
-        try:
-            g = self.find_group(group)
-            if len(offset) != 6 or not _finite(offset):
-                raise Refused(f"offset must be 6 numbers (x, y, z in m, rx, ry, rz in rad), got {len(offset)}")
-            frame = frame or "base"
-            if frame not in FRAMES:
-                raise Refused(f"unknown frame {frame!r} (base or tool)")
-            token = self._claim(MOVING, g.name, "relative")
-        except Refused as e:
-            return False, str(e)
-        try:
-            target = frames.relative_target(self._read().tcp_pose, offset, frame)
-            return self._succeed(token, self._linear_move(token, target, "relative", self.limits.tcp_speed(speed),
-                                                          self.limits.tcp_acceleration(acceleration)))
-        except Refused as e:
-            return self._fail(token, str(e))
+        return self._move(MoveRequest(RELATIVE, group, offset=tuple(offset), frame=frame),
+                          self.limits.tcp_speed(speed), self.limits.tcp_acceleration(acceleration))
 
     def move_pose(self, group: str, pose: Sequence[float], speed: float = 0.0,
                   acceleration: float = 0.0) -> tuple[bool, str]:
+        return self._move(MoveRequest(POSE, group, pose=tuple(pose)), self.limits.tcp_speed(speed),
+                          self.limits.tcp_acceleration(acceleration))
+
+    def _move(self, request: MoveRequest, speed: float, acc: float) -> tuple[bool, str]:
+        """A move service: the request checked, the arm claimed, the target computed (move_target), then moved."""
         try:
-            g = self.find_group(group)
-            if len(pose) != 6 or not _finite(pose):
-                raise Refused(f"pose must be 6 numbers (x, y, z in m, rx, ry, rz in rad), got {len(pose)}")
-            token = self._claim(MOVING, g.name, "pose")
+            g = self.check_request(request)
+            token = self._claim(MOVING, g.name, request.label)
         except Refused as e:
             return False, str(e)
         try:
-            return self._succeed(token, self._linear_move(token, list(pose), "pose", self.limits.tcp_speed(speed),
-                                                          self.limits.tcp_acceleration(acceleration)))
+            target = self.move_target(request)
+            run = self._linear_move if target.linear else self._joint_move
+            return self._succeed(token, run(token, target, speed, acc))
         except Refused as e:
             return self._fail(token, str(e))
+
+    def preview_move(self, group: str, kind: str, name: str = "", offset: Sequence[float] = (), frame: str = "",
+                     pose: Sequence[float] = ()) -> tuple[bool, str, list[str], list[float], list[float]]:
+        """/cell/manual/preview_move: (reachable, message, joint names, joint positions, TCP pose) of the target the
+        move of this kind would go to now, computed by the move's own move_target. Moves nothing and never claims
+        the arm, so it answers while a move or a jog runs; never starts the control script over another program.
+        Not reachable: the move's own words (an unknown name, bad numbers, no IK solution, a joint limit, ...)."""
+        request = MoveRequest(kind, group, name=name, offset=tuple(offset), frame=frame, pose=tuple(pose))
+        try:
+            target = self.move_target(request, take_over=False)
+        except Refused as e:
+            return False, str(e), [], [], []
+        what = request.name if kind == NAMED else f"the {kind} target"
+        return True, f"{what} is reachable", list(self.joint_names), list(target.q), list(target.tcp_pose)
+
+    # ================================================================ targets
+    def check_request(self, request: MoveRequest) -> Group:
+        """The checks a request passes before anything is asked of the robot; Refused with the move's words."""
+        g = self.find_group(request.group)
+        if request.kind == NAMED:
+            if request.name not in g.configurations:
+                raise Refused(f"unknown configuration {request.name!r} for group {g.name} "
+                              f"(it has: {', '.join(g.configurations) or 'none'})")
+        elif request.kind == RELATIVE:
+            _six(request.offset, "offset")
+            if (request.frame or "base") not in FRAMES:
+                raise Refused(f"unknown frame {request.frame!r} (base or tool)")
+        elif request.kind == POSE:
+            _six(request.pose, "pose")
+        else:
+            raise Refused(f"unknown move kind {request.kind!r} (named, relative or pose)")
+        return g
+
+    def move_target(self, request: MoveRequest, *, take_over: bool = True) -> MoveTarget:
+        """Where `request` takes the arm from where it stands now: the one computation behind the move services, a
+        tool's move_named step and the preview. Raises Refused with the move's words.
+
+        - named: the group's joints at the configuration, the arm's other joints where they are; the TCP there
+          from the controller's forward kinematics;
+        - relative: frames.relative_target of the current TCP pose; pose: the pose as given; then the IK the linear
+          move relies on: the controller's IK seeded with the current joints (ur_rtde, whose moveL does its own IK
+          from there), or the backend's own moveL planning (getLinearMoveTarget: ros_control's waypoint IK);
+        - then the joint target against the limits: the backend's own check (getJointLimitError: the URDF's
+          limits, as ros_control's moveJ), else the controller's (isJointsWithinSafetyLimits).
+
+        Moves nothing and claims nothing (safe while another move runs). take_over=False: see _control."""
+        g = self.check_request(request)
+        self._check_robot()
+        ctl = self._control(take_over)
+        start = self._read()
+        q_now = list(start.q)
+        if request.kind == NAMED:
+            q = list(start.q)
+            for i, v in zip(g.indices, g.configurations[request.name]):
+                q[i] = v
+            self._check_joint_target(ctl, q, f"configuration {request.name}")
+            tcp = list(self._call(lambda: ctl.getForwardKinematics(q, list(self._tcp_offset))))
+            return MoveTarget(g, request, start, tuple(q), tuple(tcp), linear=False)
+        pose = (frames.relative_target(start.tcp_pose, request.offset, request.frame or "base")
+                if request.kind == RELATIVE else [float(v) for v in request.pose])
+        # Check first: IK (or a moveL) to a pose without solution ends ur_rtde's control script with a runtime error.
+        if not self._call(lambda: ctl.getInverseKinematicsHasSolution(pose, q_now, 1e-10, 1e-10), timeout=5.0):
+            raise Refused("pose unreachable: no inverse kinematics solution")
+        plan = getattr(ctl, "getLinearMoveTarget", None)
+        if plan is not None:
+            q = list(self._call(lambda: plan(pose, q_now), timeout=5.0))
+        else:
+            q = list(self._call(lambda: ctl.getInverseKinematics(pose, q_now, 1e-10, 1e-10), timeout=5.0))
+        if len(q) != len(q_now) or not _finite(q):
+            raise Refused("pose unreachable: the controller gave no inverse kinematics solution")
+        self._check_joint_target(ctl, q, f"the {request.kind} target")
+        return MoveTarget(g, request, start, tuple(q), tuple(pose), linear=True)
+
+    def _check_joint_target(self, ctl: ControlInterface, q: list[float], what: str) -> None:
+        explain = getattr(ctl, "getJointLimitError", None)
+        if explain is not None:
+            why = self._call(lambda: explain(q))
+            if why:
+                raise Refused(why)
+        elif not self._call(lambda: ctl.isJointsWithinSafetyLimits(q)):
+            raise Refused(f"{what} is outside the robot's safety limits (joint limits, safety planes or reach)")
 
     def tool_action(self, tool: str, action: str) -> tuple[bool, str]:
         label = f"{tool} {action}"
@@ -568,10 +677,10 @@ class ManualDriver:
                 elif isinstance(step, WaitInput):
                     self._wait_input(token, label, step)
                 elif isinstance(step, MoveNamedStep):
-                    g = self.find_group(step.group)
                     try:
-                        self._joint_move(token, g, step.configuration, self.limits.default_speed,
-                                         self.limits.default_acceleration)
+                        self._joint_move(token, self.move_target(MoveRequest(NAMED, step.group,
+                                                                             name=step.configuration)),
+                                         self.limits.default_speed, self.limits.default_acceleration)
                     except Refused as e:
                         self._check_token(token)
                         raise Refused(f"{label}: {e}") from None
@@ -683,13 +792,12 @@ class ManualDriver:
             self.sleep(POLL_S)
 
     # ================================================================ moves
-    def _joint_move(self, token: int, g: Group, name: str, speed: float, acc: float) -> str:
-        """Move to a named configuration; returns the success message, raises Refused."""
-        ctl = self._control()
-        start = self._read()
-        target = list(start.q)
-        for i, v in zip(g.indices, g.configurations[name]):
-            target[i] = v
+    def _joint_move(self, token: int, t: MoveTarget, speed: float, acc: float) -> str:
+        """Move to a named configuration's target (move_target); returns the success message, raises Refused."""
+        ctl = self._ctl  # move_target made it
+        if ctl is None:
+            raise Refused(self._unreachable())
+        start, target, name = t.start, list(t.q), t.request.name
         lead = max(abs(a - b) for a, b in zip(target, start.q))
 
         def progress(s: Snapshot) -> float:
@@ -707,14 +815,13 @@ class ManualDriver:
         self._await(token, progress, arrived, lead / speed + speed / acc)
         return f"arrived at {name}"
 
-    def _linear_move(self, token: int, pose: list[float], label: str, speed: float, acc: float) -> str:
-        """A straight TCP line to `pose`; returns the success message, raises Refused."""
-        ctl = self._control()
-        start = self._read()
-        near = list(start.q)
-        # Check first: a moveL to a pose without IK solution would end the control script with a runtime error.
-        if not self._call(lambda: ctl.getInverseKinematicsHasSolution(pose, near, 1e-10, 1e-10), timeout=5.0):
-            raise Refused("pose unreachable: no inverse kinematics solution")
+    def _linear_move(self, token: int, t: MoveTarget, speed: float, acc: float) -> str:
+        """A straight TCP line to the target's pose (move_target checked its IK); returns the success message,
+        raises Refused."""
+        ctl = self._ctl  # move_target made it
+        if ctl is None:
+            raise Refused(self._unreachable())
+        start, pose, label = t.start, list(t.tcp_pose), t.request.label
         d0, a0 = frames.pose_distance(start.tcp_pose, pose)
         length = max(d0, a0 * 0.1)
 

@@ -212,16 +212,35 @@ class RosControlArm:
     def getTCPOffset(self) -> list[float]:
         return [0.0] * 6  # the URDF's tip link is the TCP
 
-    # ------------------------------------------------------------------ moves
-    def _check_limits(self, target: Sequence[float]) -> None:
-        qk = self._kin_q(target)
+    # What the driver core asks for a move's target (driver.ManualDriver.move_target) where ur_rtde's controller
+    # answers with getInverseKinematics and isJointsWithinSafetyLimits: here the answers of this backend's own moves.
+    def getLinearMoveTarget(self, pose: list[float], qnear: list[float]) -> list[float]:
+        """The joints a moveL from `qnear` to `pose` ends at: the last waypoint of the line moveL itself follows
+        (trajectory.linear_path, IK seeded waypoint by waypoint). Refused with moveL's own words when the line
+        cannot be followed (a joint limit, a singularity, out of reach on the way)."""
+        try:
+            path = trajectory.linear_path(self.kin, self._kin_q(qnear), list(pose))
+        except trajectory.TrajectoryError as e:
+            raise Refused(str(e))
+        return self._from_kin([float(v) for v in path.qs[-1]])
+
+    def getJointLimitError(self, q: list[float]) -> str:
+        """Why moveJ would refuse the joint target `q` (the URDF's position limits), "" when it would not."""
+        if len(q) != len(self.joints):
+            return f"a joint target needs {len(self.joints)} values, got {len(q)}"
+        qk = self._kin_q(q)
         for name, v, lo, hi in zip(self.kin.joint_names, qk, self.kin.lower, self.kin.upper):
             if not lo - 1e-9 <= v <= hi + 1e-9:
-                raise Refused(f"joint {name}: target {v:.3f} rad is outside its limits [{lo:.3f}, {hi:.3f}] rad")
+                return f"joint {name}: target {v:.3f} rad is outside its limits [{lo:.3f}, {hi:.3f}] rad"
+        return ""
+
+    # ------------------------------------------------------------------ moves
+    def _check_limits(self, target: Sequence[float]) -> None:
+        why = self.getJointLimitError(list(target))
+        if why:
+            raise Refused(why)
 
     def moveJ(self, q: list[float], speed: float, acceleration: float, asynchronous: bool = True) -> bool:
-        if len(q) != len(self.joints):
-            raise Refused(f"a joint target needs {len(self.joints)} values, got {len(q)}")
         self._check_limits(q)
         start = self._q_qd()[0]
         vmax = [min(speed, v) for v in self._from_kin(self.kin.velocity_limits)]

@@ -16,6 +16,8 @@ CONTROLLER_TIMEOUT = 1.0
 
 
 class RosControlConnector:
+    control_takes_over = False  # the control client is the same arm object: making it starts nothing
+
     def __init__(self, spec: RosControlSpec, joints: Sequence[str], transport: Transport, max_joint_speed: float,
                  state_timeout: float = STATE_TIMEOUT, sleep: Callable[[float], None] = time.sleep,
                  controller_timeout: float = CONTROLLER_TIMEOUT) -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional, Sequence
+from typing import NamedTuple, Optional, Sequence
 
 import numpy as np
 
@@ -174,32 +174,25 @@ def _pose_text(pose: Sequence[float]) -> str:
     return "(" + ", ".join(f"{v * 1000:.1f}" for v in pose[:3]) + ") mm"
 
 
-def linear_move(kin: Kinematics, start_q: Sequence[float], target_pose: Sequence[float], tcp_speed: float,
-                tcp_acceleration: float, max_joint_speed: float, *, rotation_speed: Optional[float] = None,
-                rotation_acceleration: Optional[float] = None, max_joint_acceleration: Optional[float] = None,
-                max_step: float = MAX_STEP, max_step_angle: float = MAX_STEP_ANGLE,
-                max_joint_step: float = MAX_JOINT_STEP) -> list[TrajectoryPoint]:
-    """A straight TCP line (like moveL) from FK(start_q) to target_pose: position along the line, orientation by
-    slerp, both on one trapezoidal timing law. Waypoints every <= max_step / max_step_angle, each solved by IK
-    seeded with the previous one (so the arm stays in its configuration).
+class LinearPath(NamedTuple):
+    """The joints of a straight TCP line, one row per waypoint (the first row the start, the last the target)."""
+    qs: np.ndarray
+    length: float                   # m the TCP travels
+    angle: float                    # rad the tool turns
 
-    Speeds: the TCP at most tcp_speed (m/s) and tcp_acceleration; the tool's turning at most rotation_speed
-    (rad/s, default max_joint_speed) and rotation_acceleration (default: the same ramp time as the TCP's);
-    no joint above max_joint_speed (nor its URDF velocity limit) and, when given, max_joint_acceleration
-    (accounted for along the path, not for the path's curvature in joint space). The timing is stretched until
-    the finished points, checked with kin.tcp_speed, keep every cap.
+
+def linear_path(kin: Kinematics, start_q: Sequence[float], target_pose: Sequence[float], *,
+                max_step: float = MAX_STEP, max_step_angle: float = MAX_STEP_ANGLE,
+                max_joint_step: float = MAX_JOINT_STEP) -> LinearPath:
+    """The waypoints of a straight TCP line (like moveL) from FK(start_q) to target_pose: position along the line,
+    orientation by slerp, every <= max_step / max_step_angle, each solved by IK seeded with the previous one (so
+    the arm stays in its configuration). Its last row is where linear_move ends: the move's target joints.
+    No motion (already there): the start alone.
 
     Raises TrajectoryError: "pose unreachable: ...", "joint limit: ...", "singularity: ...".
     """
     q0 = _vector(start_q, kin.n, "start joints")
     target = _vector(target_pose, 6, "target pose")
-    tcp_speed = _positive(tcp_speed, "TCP speed")
-    tcp_acceleration = _positive(tcp_acceleration, "TCP acceleration")
-    max_joint_speed = _positive(max_joint_speed, "joint speed")
-    rot_speed = _positive(rotation_speed, "rotation speed") if rotation_speed is not None else max_joint_speed
-    rot_acc = _positive(rotation_acceleration, "rotation acceleration") if rotation_acceleration is not None \
-        else rot_speed * tcp_acceleration / tcp_speed
-
     start_t = frames.pose_to_matrix(kin.fk(q0))
     target_t = frames.pose_to_matrix(target)
     dp = target_t[:3, 3] - start_t[:3, 3]
@@ -207,7 +200,7 @@ def linear_move(kin: Kinematics, start_q: Sequence[float], target_pose: Sequence
     rel = frames.matrix_to_rotvec(target_t[:3, :3] @ start_t[:3, :3].T)   # start -> target, base axes
     angle = float(np.linalg.norm(rel))
     if length < 1e-7 and angle < 1e-7:
-        return _hold(q0, SAMPLE_TIME)
+        return LinearPath(np.array([q0]), length, angle)
     # Cheap refusal first: is the target reachable at all (any configuration within the limits)?
     if kin.ik(target, q0) is None:
         raise TrajectoryError(f"pose unreachable: no joint solution within the joint limits reaches the target "
@@ -246,7 +239,39 @@ def linear_move(kin: Kinematics, start_q: Sequence[float], target_pose: Sequence
                                   "a configuration change; use a joint move")
         qs.append(np.asarray(q, dtype=float))
         prev = q
-    return _time_path(kin, np.array(qs), length, angle, tcp_speed, tcp_acceleration, rot_speed, rot_acc,
+    return LinearPath(np.array(qs), length, angle)
+
+
+def linear_move(kin: Kinematics, start_q: Sequence[float], target_pose: Sequence[float], tcp_speed: float,
+                tcp_acceleration: float, max_joint_speed: float, *, rotation_speed: Optional[float] = None,
+                rotation_acceleration: Optional[float] = None, max_joint_acceleration: Optional[float] = None,
+                max_step: float = MAX_STEP, max_step_angle: float = MAX_STEP_ANGLE,
+                max_joint_step: float = MAX_JOINT_STEP) -> list[TrajectoryPoint]:
+    """A straight TCP line (like moveL) from FK(start_q) to target_pose: the waypoints of linear_path, both
+    position and orientation on one trapezoidal timing law.
+
+    Speeds: the TCP at most tcp_speed (m/s) and tcp_acceleration; the tool's turning at most rotation_speed
+    (rad/s, default max_joint_speed) and rotation_acceleration (default: the same ramp time as the TCP's);
+    no joint above max_joint_speed (nor its URDF velocity limit) and, when given, max_joint_acceleration
+    (accounted for along the path, not for the path's curvature in joint space). The timing is stretched until
+    the finished points, checked with kin.tcp_speed, keep every cap.
+
+    Raises TrajectoryError: "pose unreachable: ...", "joint limit: ...", "singularity: ...".
+    """
+    q0 = _vector(start_q, kin.n, "start joints")
+    _vector(target_pose, 6, "target pose")
+    tcp_speed = _positive(tcp_speed, "TCP speed")
+    tcp_acceleration = _positive(tcp_acceleration, "TCP acceleration")
+    max_joint_speed = _positive(max_joint_speed, "joint speed")
+    rot_speed = _positive(rotation_speed, "rotation speed") if rotation_speed is not None else max_joint_speed
+    rot_acc = _positive(rotation_acceleration, "rotation acceleration") if rotation_acceleration is not None \
+        else rot_speed * tcp_acceleration / tcp_speed
+
+    path = linear_path(kin, q0, target_pose, max_step=max_step, max_step_angle=max_step_angle,
+                       max_joint_step=max_joint_step)
+    if len(path.qs) == 1:
+        return _hold(q0, SAMPLE_TIME)
+    return _time_path(kin, path.qs, path.length, path.angle, tcp_speed, tcp_acceleration, rot_speed, rot_acc,
                       max_joint_speed, max_joint_acceleration)
 
 

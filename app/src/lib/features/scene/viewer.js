@@ -1,0 +1,347 @@
+/**
+ * The 3D view itself (three.js, urdf-loader): loaded lazily by Scene3D.svelte, so no other page carries three.js.
+ * It draws on demand (a change, a camera move, a resize) and only while its canvas is on screen and the app
+ * is visible.
+ */
+import * as THREE from 'three';
+import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
+import { STLLoader } from 'three/examples/jsm/loaders/STLLoader.js';
+import { ColladaLoader } from 'three/examples/jsm/loaders/ColladaLoader.js';
+import { OBJLoader } from 'three/examples/jsm/loaders/OBJLoader.js';
+import URDFLoader from 'urdf-loader';
+import { presetPose } from './logic.js';
+
+const STALE_COLOR = new THREE.Color(0x8a8f98);
+const GHOST_COLOR = new THREE.Color(0xf59e0b);
+const FOV = 45;
+
+/** Whether this browser can draw WebGL at all. */
+export function webglAvailable() {
+  try {
+    const c = document.createElement('canvas');
+    return !!(window.WebGLRenderingContext && (c.getContext('webgl2') || c.getContext('webgl')));
+  } catch {
+    return false;
+  }
+}
+
+/**
+ * @typedef {{ robot: any, stale: boolean, originals: Map<any, any>, ghost?: boolean }} ArmEntry
+ */
+
+export class SceneViewer {
+  /**
+   * @param {HTMLElement} host  the element the canvas fills
+   * @param {{ onMeshError?: (group: string, file: string) => void, label?: string }} [o]
+   */
+  constructor(host, o = {}) {
+    this.host = host;
+    this.onMeshError = o.onMeshError ?? (() => {});
+    this.renderer = new THREE.WebGLRenderer({ antialias: true, powerPreference: 'low-power' });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    const canvas = this.renderer.domElement;
+    canvas.setAttribute('role', 'img');
+    canvas.setAttribute('aria-label', o.label ?? '3D view of the cell');
+    canvas.style.display = 'block';
+    canvas.style.touchAction = 'none';
+    host.appendChild(canvas);
+
+    this.scene = new THREE.Scene();
+    this.scene.background = new THREE.Color(0xe9edf2);
+    this.camera = new THREE.PerspectiveCamera(FOV, 1, 0.01, 100);
+    this.camera.up.set(0, 0, 1); // ROS: z up
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x667080, 2.2));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+    sun.position.set(2, -1.5, 3);
+    this.scene.add(sun);
+    // The floor (the cell frame's xy plane, 0.1 m grid) and the cell frame's axes (x red, y green, z blue).
+    const grid = new THREE.GridHelper(4, 40, 0x9aa3ad, 0xc8ced6);
+    grid.rotation.x = Math.PI / 2;
+    this.scene.add(grid);
+    this.scene.add(new THREE.AxesHelper(0.25));
+    /** @type {Map<string, ArmEntry>} */
+    this.arms = new Map();
+    /** @type {Map<string, THREE.Mesh>} */
+    this.shapes = new Map();
+    /** @type {Map<string, { text: string, base: number[] }>} */
+    this.urdfs = new Map();
+    /** @type {Map<string, any>} the target ghost of each arm, when there is one */
+    this.ghosts = new Map();
+
+    this.controls = new OrbitControls(this.camera, canvas);
+    // One finger orbits, two pan and pinch-zoom (OrbitControls' touch defaults, stated here on purpose).
+    this.controls.touches = { ONE: THREE.TOUCH.ROTATE, TWO: THREE.TOUCH.DOLLY_PAN };
+    this.controls.enableDamping = false;
+    this.controls.addEventListener('change', () => this.invalidate());
+    // Once the user turns the camera, the view no longer re-frames itself when the content changes.
+    this.userMoved = false;
+    this.controls.addEventListener('start', () => { this.userMoved = true; });
+
+    this.frames = 0;
+    this.visible = true;
+    this.raf = 0;
+    this.disposed = false;
+    this.resize = new ResizeObserver(() => this.fit());
+    this.resize.observe(host);
+    this.onScreen = new IntersectionObserver((entries) => {
+      this.visible = entries.some((e) => e.isIntersecting);
+      this.invalidate();
+    });
+    this.onScreen.observe(host);
+    this.onVisibility = () => this.invalidate();
+    document.addEventListener('visibilitychange', this.onVisibility);
+    this.fit();
+    this.preset('front');
+  }
+
+  fit() {
+    const w = Math.max(1, this.host.clientWidth);
+    const h = Math.max(1, this.host.clientHeight);
+    this.renderer.setSize(w, h, false);
+    this.renderer.domElement.style.width = '100%';
+    this.renderer.domElement.style.height = '100%';
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    this.invalidate();
+  }
+
+  /** Draw at the next frame (once, however many changes come before it), if the view is on screen. */
+  invalidate() {
+    if (this.disposed || this.raf || !this.visible || document.visibilityState === 'hidden') return;
+    this.raf = requestAnimationFrame(() => {
+      this.raf = 0;
+      if (this.disposed) return;
+      this.renderer.render(this.scene, this.camera);
+      this.frames++;
+    });
+  }
+
+  /**
+   * Add an arm from its URDF text, its base placed at base = [x, y, z, yaw deg] in the cell frame.
+   * @param {string} group @param {string} urdf @param {number[]} base
+   * @returns {any} the URDF robot (its joints by name)
+   */
+  addArm(group, urdf, base) {
+    const robot = this.#load(group, urdf);
+    robot.position.set(base[0], base[1], base[2]);
+    robot.rotation.set(0, 0, (base[3] * Math.PI) / 180);
+    this.scene.add(robot);
+    this.arms.set(group, { robot, stale: false, originals: new Map() });
+    this.urdfs.set(group, { text: urdf, base });
+    this.frameAll();
+    return robot;
+  }
+
+  /** @param {string} group @param {string} urdf */
+  #load(group, urdf) {
+    const manager = new THREE.LoadingManager();
+    manager.onLoad = () => {
+      for (const g of this.ghosts.values()) g.traverse(g.userData.glassy);
+      this.invalidate();
+    };
+    const loader = new URDFLoader(manager);
+    loader.parseCollision = false;
+    loader.loadMeshCb = (/** @type {string} */ path, /** @type {THREE.LoadingManager} */ m, /** @type {THREE.Material} */ material, /** @type {(o: any, e?: Error) => void} */ done) => {
+      const ext = path.split('?')[0].split('.').pop()?.toLowerCase();
+      const fail = (/** @type {any} */ e) => {
+        this.onMeshError(group, decodeURIComponent(path.split('/').pop() ?? path));
+        done(null, e instanceof Error ? e : new Error(String(e)));
+      };
+      if (ext === 'stl') {
+        new STLLoader(m).load(path, (geom) => done(new THREE.Mesh(geom, material)), undefined, fail);
+      } else if (ext === 'dae') {
+        new ColladaLoader(m).load(path, (dae) => done(dae?.scene ?? null), undefined, fail);
+      } else if (ext === 'obj') {
+        new OBJLoader(m).load(path, (obj) => {
+          obj.traverse((c) => { if (/** @type {any} */ (c).isMesh) /** @type {any} */ (c).material = material; });
+          done(obj);
+        }, undefined, fail);
+      } else {
+        fail(new Error(`unsupported mesh format .${ext}`));
+      }
+    };
+    const robot = loader.parse(urdf);
+    // Draw the joints as reported, even past a limit the URDF states.
+    for (const j of Object.values(robot.joints)) /** @type {any} */ (j).ignoreLimits = true;
+    return robot;
+  }
+
+  /**
+   * @param {string} group @param {Record<string, number>} values joint name -> position (rad or m)
+   * @returns {boolean} whether anything moved
+   */
+  setJoints(group, values) {
+    const arm = this.arms.get(group);
+    if (!arm) return false;
+    let moved = false;
+    for (const [name, v] of Object.entries(values)) {
+      const j = arm.robot.joints[name];
+      if (j && j.setJointValue(v)) moved = true;
+    }
+    if (moved) this.invalidate();
+    return moved;
+  }
+
+  /**
+   * Show where a move would take the arm: a translucent copy of it at the target joints (null: none).
+   * @param {string} group @param {Record<string, number> | null} values
+   */
+  setGhost(group, values) {
+    let ghost = this.ghosts.get(group);
+    if (!values) {
+      if (ghost) {
+        this.scene.remove(ghost);
+        ghost.traverse((/** @type {any} */ o) => { if (o.isMesh) o.material.dispose(); });
+        this.ghosts.delete(group);
+        this.invalidate();
+      }
+      return;
+    }
+    const src = this.urdfs.get(group);
+    if (!src) return;
+    if (!ghost) {
+      ghost = this.#load(group, src.text);
+      ghost.position.set(src.base[0], src.base[1], src.base[2]);
+      ghost.rotation.set(0, 0, (src.base[3] * Math.PI) / 180);
+      // Meshes load later: each one that arrives is made see-through as well.
+      const glassy = (/** @type {any} */ o) => {
+        if (!o.isMesh || o.userData.ghost) return;
+        o.userData.ghost = true;
+        o.material = new THREE.MeshStandardMaterial({ color: GHOST_COLOR, transparent: true, opacity: 0.35, depthWrite: false });
+      };
+      ghost.traverse(glassy);
+      ghost.userData.glassy = glassy;
+      this.ghosts.set(group, ghost);
+      this.scene.add(ghost);
+    }
+    for (const [name, v] of Object.entries(values)) ghost.joints[name]?.setJointValue(v);
+    ghost.traverse(ghost.userData.glassy);
+    this.invalidate();
+  }
+
+  /** The joint values the ghost of an arm is drawn at (none: no ghost). @param {string} group @param {string[]} names */
+  ghostJoints(group, names) {
+    const g = this.ghosts.get(group);
+    /** @type {Record<string, number>} */
+    const out = {};
+    if (g) for (const n of names) if (g.joints[n]) out[n] = Number(g.joints[n].angle);
+    return out;
+  }
+
+  /** The joint values the view draws (what the tests compare with /joint_states). @param {string} group @param {string[]} names */
+  drawnJoints(group, names) {
+    const arm = this.arms.get(group);
+    /** @type {Record<string, number>} */
+    const out = {};
+    for (const n of names) {
+      const j = arm?.robot.joints[n];
+      if (j) out[n] = Number(j.angle);
+    }
+    return out;
+  }
+
+  /** Grey the arm out (its joint states are old) or give it its colours back. @param {string} group @param {boolean} stale */
+  setStale(group, stale) {
+    const arm = this.arms.get(group);
+    if (!arm || arm.stale === stale) return;
+    arm.stale = stale;
+    arm.robot.traverse((/** @type {any} */ o) => {
+      if (!o.isMesh) return;
+      if (stale) {
+        arm.originals.set(o, o.material);
+        const grey = (Array.isArray(o.material) ? o.material[0] : o.material).clone();
+        grey.color?.copy(STALE_COLOR);
+        grey.transparent = true;
+        grey.opacity = 0.55;
+        o.material = grey;
+      } else if (arm.originals.has(o)) {
+        o.material = arm.originals.get(o);
+      }
+    });
+    if (!stale) arm.originals.clear();
+    this.invalidate();
+  }
+
+  /** Show the shapes (markers) given, by key; others are removed. @param {Iterable<import('./logic.js').Shape>} list */
+  setShapes(list) {
+    const keep = new Set();
+    for (const s of list) {
+      keep.add(s.key);
+      let mesh = this.shapes.get(s.key);
+      if (!mesh || mesh.userData.shape !== s.shape) {
+        if (mesh) this.#drop(mesh);
+        const geom = s.shape === 'sphere' ? new THREE.SphereGeometry(0.5, 20, 14)
+          : s.shape === 'cylinder' ? new THREE.CylinderGeometry(0.5, 0.5, 1, 24).rotateX(Math.PI / 2) // ROS: along z
+            : new THREE.BoxGeometry(1, 1, 1);
+        mesh = new THREE.Mesh(geom, new THREE.MeshStandardMaterial({ roughness: 0.7 }));
+        mesh.userData.shape = s.shape;
+        this.shapes.set(s.key, mesh);
+        this.scene.add(mesh);
+      }
+      mesh.position.fromArray(s.position);
+      mesh.quaternion.fromArray(s.quaternion);
+      mesh.scale.fromArray(s.scale);
+      const mat = /** @type {THREE.MeshStandardMaterial} */ (mesh.material);
+      mat.color.setRGB(s.color[0], s.color[1], s.color[2]);
+      mat.transparent = s.color[3] < 1;
+      mat.opacity = s.color[3];
+    }
+    for (const [k, mesh] of this.shapes) if (!keep.has(k)) { this.#drop(mesh); this.shapes.delete(k); }
+    this.invalidate();
+  }
+
+  /** @param {THREE.Mesh} mesh */
+  #drop(mesh) {
+    this.scene.remove(mesh);
+    mesh.geometry.dispose();
+    /** @type {THREE.Material} */ (mesh.material).dispose();
+  }
+
+  /** The sphere around everything the cell shows (arms and shapes). */
+  bounds() {
+    const box = new THREE.Box3();
+    for (const a of this.arms.values()) box.expandByObject(a.robot);
+    for (const m of this.shapes.values()) box.expandByObject(m);
+    if (box.isEmpty()) box.set(new THREE.Vector3(-0.5, -0.5, 0), new THREE.Vector3(0.5, 0.5, 0.8));
+    const sphere = box.getBoundingSphere(new THREE.Sphere());
+    return { center: sphere.center.toArray(), radius: sphere.radius };
+  }
+
+  /** Remember the frame of the whole cell (the presets and Reset view use it); re-aim unless the user moved the camera. */
+  frameAll() {
+    this.home = this.bounds();
+    if (!this.userMoved) this.preset(this.lastPreset ?? 'front');
+  }
+
+  /** @param {'front' | 'top' | 'side'} name */
+  preset(name) {
+    this.lastPreset = name;
+    const b = this.home ?? this.bounds();
+    const p = presetPose(name, b.center, b.radius, FOV, this.camera.aspect);
+    this.camera.position.fromArray(p.position);
+    this.controls.target.fromArray(p.target);
+    this.controls.update();
+    this.invalidate();
+  }
+
+  resetView() {
+    this.userMoved = false;
+    this.frameAll();
+    this.preset('front');
+  }
+
+  dispose() {
+    this.disposed = true;
+    if (this.raf) cancelAnimationFrame(this.raf);
+    this.resize.disconnect();
+    this.onScreen.disconnect();
+    document.removeEventListener('visibilitychange', this.onVisibility);
+    this.controls.dispose();
+    this.scene.traverse((/** @type {any} */ o) => {
+      o.geometry?.dispose?.();
+      for (const m of [o.material].flat()) m?.dispose?.();
+    });
+    this.renderer.dispose();
+    this.renderer.domElement.remove();
+  }
+}

@@ -1,0 +1,35 @@
+// The twin-arm cell's 3D view: both arms, each from its own URDF parameter and placed where it stands, moved by the
+// one /joint_states both drivers share (each arm picks its own joint names), with the cell's parts.
+import fs from 'node:fs';
+import yaml from 'js-yaml';
+import { test, expect } from '@playwright/test';
+import { loginAs } from '../lib/app.js';
+import { watchRobot } from '../lib/robot.js';
+
+const cell = /** @type {any} */ (yaml.load(fs.readFileSync(String(process.env.E2E_CELL_CONFIG), 'utf8')));
+const groups = cell.manual.groups;
+
+/** @type {Record<string, import('../lib/robot.js').RobotWatch>} */
+const arms = {};
+test.beforeAll(async () => {
+  for (const g of groups) arms[g.name] = await watchRobot(g.name);
+});
+test.afterAll(() => Object.values(arms).forEach((a) => a.close()));
+
+test('the 3D view shows both arms, each drawn at its own joint states, and the parts', async ({ page }) => {
+  expect(groups.length).toBe(2);
+  await loginAs(page, 'operator');
+  await page.goto('/scene');
+  const view = page.getByTestId('scene-view');
+  await expect(view.getByRole('img', { name: /3D view/ })).toBeVisible();
+  for (const g of groups) {
+    await expect(view.getByRole('table', { name: `Joint values of ${g.name}` })).toBeVisible();
+    await expect.poll(async () => {
+      const drawn = await Promise.all(g.joints.map(async (/** @type {string} */ j) => Number(await view.locator(`[data-testid="scene-joint"][data-group="${g.name}"][data-joint="${j}"]`).getAttribute('data-value') || NaN)));
+      const actual = arms[g.name].joints();
+      return Math.max(...drawn.map((v, i) => (Number.isFinite(v) ? Math.abs(v - actual[i]) : Infinity)));
+    }, { timeout: 10_000 }).toBeLessThan(0.01);
+  }
+  await expect(view.getByTestId('scene-objects')).toHaveText(new RegExp(`^\\d+ objects from ${cell.scene.markers}$`));
+  await expect(view.getByRole('alert')).toHaveCount(0);
+});
