@@ -87,6 +87,12 @@ test('an admin records two poses and a gripper action, runs the routine (both po
   await expect(saved).toBeVisible();
   await expect(saved).toContainText('4 steps: 2 poses, 2 actions');
   await expect(page.getByTestId('routine-draft')).toHaveCount(0);
+  // Its recorded poses as a path in the 3D view (a panel that opens on demand).
+  const scene = page.getByTestId('routines-scene');
+  await scene.getByRole('button', { name: 'Show 3D view' }).click();
+  await saved.getByRole('button', { name: 'Show path of e2e pick' }).click();
+  await expect(scene.getByTestId('scene-path')).toHaveText('Path of e2e pick: 2 recorded poses');
+  await expect(scene.getByRole('img', { name: /3D view/ })).toBeVisible();
 
   // Run it from somewhere else.
   await moveRelative(page, { dy: '60' });

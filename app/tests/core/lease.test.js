@@ -275,4 +275,15 @@ describe('ControlLease', () => {
     expect(holderLabel(ann)).toBe('ann (operator)');
     expect(holderLabel(null)).toBe('nobody');
   });
+
+  it('follows the cell\'s lease timeout: each heartbeat gives up after half of it', async () => {
+    const { lease, calls, step } = setup();
+    lease.configure(5);
+    lease.configure('nonsense'); // ignored
+    lease.configure(0); // ignored
+    await lease.take();
+    await step();
+    expect(calls).toEqual(['controlTake', 'controlHeartbeat(2500 ms)']);
+    expect(lease.timeoutMs).toBe(5000);
+  });
 });

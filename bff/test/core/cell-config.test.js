@@ -75,7 +75,7 @@ test('pages and config are filtered by role', () => {
   assert.equal(c.roles, undefined, 'the grants of other roles are not sent');
   assert.deepEqual(Object.keys(c.features).sort(), ['alarms', 'manual', 'modules', 'process', 'scene', 'sensors', 'video']);
   assert.deepEqual(c.commands, ['modules', 'process', 'alarms']);
-  assert.deepEqual(c.control, { take_over: false });
+  assert.deepEqual(c.control, { take_over: false, heartbeat_timeout_s: 5 });
   assert.deepEqual(c.stop, { service: '/cell/manual/stop', type: 'std_srvs/Trigger' }, 'every role that sees a page stops the robot');
   const watcher = { ...cell, roles: { ...cell.roles, watcher: { pages: ['sensors'] } } };
   assert.deepEqual(configFor(watcher, FEATURES, 'watcher').stop, c.stop, 'a role that never moves the robot still stops it');

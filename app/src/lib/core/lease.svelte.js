@@ -82,6 +82,18 @@ export class ControlLease {
     this.onUnauthorized = o.onUnauthorized ?? (() => {});
   }
 
+  /**
+   * The cell's lease timeout (GET /api/config control.heartbeat_timeout_s); each heartbeat then gives up after half
+   * of it. Anything not a positive number leaves the timeout as it is.
+   * @param {unknown} seconds
+   */
+  configure(seconds) {
+    const s = Number(seconds);
+    if (!(s > 0)) return;
+    this.timeoutMs = s * 1000;
+    this.heartbeatTimeoutMs = this.timeoutMs / 2;
+  }
+
   /** Someone shows the lease: keep it fresh. Returns the function that stops watching. */
   watch() {
     this.#watchers++;

@@ -22,7 +22,7 @@ const PENDING_LOGOUT_KEY = 'cell-ui.logout-pending';
  * @property {{ topic: string, type: string, modes: string[] }} operation_mode
  * @property {Record<string, any>} [features]  each visible feature's part of the cell file, by feature id
  * @property {string[]} [commands]  feature ids whose commands this role may send
- * @property {{ take_over: boolean }} [control]  whether this role may take the control lease over
+ * @property {{ take_over: boolean, heartbeat_timeout_s?: number }} [control]  whether this role may take the control lease over; the cell's lease timeout
  * @property {{ service: string, type: string } | null} [stop]  the robot stop service (std_srvs/Trigger),
  *   present for every role that sees any page (whether or not it moves the robot)
  */

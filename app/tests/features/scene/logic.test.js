@@ -2,7 +2,7 @@ import { describe, it, expect } from 'vitest';
 import URDFLoader from 'urdf-loader';
 import {
   sceneSection, pickJoints, parseUrdf, urdfJoints, missingJoints, mimicValues, staleness, staleText, applyMarkers,
-  presetPose, formatJoint,
+  presetPose, formatJoint, routinePath,
 } from '../../../src/lib/features/scene/logic.js';
 
 // A two-joint arm with a two-finger gripper whose right finger mimics the left one (as a gripper URDF does).
@@ -110,5 +110,15 @@ describe('scene logic', () => {
 
   it('formats a joint value in rad and degrees', () => {
     expect(formatJoint(Math.PI / 2)).toBe('1.571 rad (90.0°)');
+  });
+
+  it('a routine\'s path: the positions of its pose steps, in order (tool actions have none)', () => {
+    const steps = [
+      { kind: 'pose', pose: [0.1, 0.2, 0.3, 0, 3.14, 0] },
+      { kind: 'action', pose: [] },
+      { kind: 'pose', pose: [0.1, 0.2, 0.5, 0, 3.14, 0] },
+      { kind: 'pose', pose: [NaN, 0, 0, 0, 0, 0] },
+    ];
+    expect(routinePath({ name: 'r', group: 'arm', steps })).toEqual({ name: 'r', group: 'arm', points: [[0.1, 0.2, 0.3], [0.1, 0.2, 0.5]] });
   });
 });

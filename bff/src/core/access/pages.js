@@ -35,7 +35,8 @@ export function configFor(cell, features, role) {
     operation_mode: { topic, type, modes },
     features: views,
     commands: (def?.commands || []).filter((c) => def.pages.includes(c)),
-    control: { take_over: def?.take_over === true },
+    // heartbeat_timeout_s: the app heartbeats well within it and tells a lost link from a lost lease by it.
+    control: { take_over: def?.take_over === true, heartbeat_timeout_s: cell.control?.heartbeat_timeout_s ?? 2 },
     stop: robotStopFor(cell, features, role),
   };
 }

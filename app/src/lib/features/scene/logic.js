@@ -223,3 +223,15 @@ export function presetPose(name, center, radius, fovDeg, aspect) {
 
 /** @param {number} v rad @returns {string} */
 export const formatJoint = (v) => `${v.toFixed(3)} rad (${((v * 180) / Math.PI).toFixed(1)}°)`;
+
+/**
+ * A routine's recorded TCP poses as a path to draw: the positions (base frame of its group's arm) of its pose steps.
+ * @param {{ name: string, group: string, steps: { kind: string, pose: number[] }[] }} routine
+ * @returns {{ name: string, group: string, points: number[][] }}
+ */
+export function routinePath(routine) {
+  const points = routine.steps
+    .filter((s) => s.kind === 'pose' && s.pose.length >= 3 && s.pose.slice(0, 3).every(Number.isFinite))
+    .map((s) => s.pose.slice(0, 3));
+  return { name: routine.name, group: routine.group, points };
+}

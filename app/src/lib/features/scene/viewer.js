@@ -13,7 +13,10 @@ import { presetPose } from './logic.js';
 
 const STALE_COLOR = new THREE.Color(0x8a8f98);
 const GHOST_COLOR = new THREE.Color(0xf59e0b);
+const PATH_COLOR = new THREE.Color(0x7c3aed);
 const FOV = 45;
+const MAX_FPS = 30;
+const MIN_CHANGE = 1e-4;
 
 /** Whether this browser can draw WebGL at all. */
 export function webglAvailable() {
@@ -37,8 +40,11 @@ export class SceneViewer {
   constructor(host, o = {}) {
     this.host = host;
     this.onMeshError = o.onMeshError ?? (() => {});
-    this.renderer = new THREE.WebGLRenderer({ antialias: true, powerPreference: 'low-power' });
-    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    // No multisampling: on a phone's GPU (or a software renderer) it costs more than the edges are worth.
+    this.renderer = new THREE.WebGLRenderer({ antialias: false, powerPreference: 'low-power' });
+    // At most 1.5 device pixels per CSS pixel: sharp enough, and a phone's GPU (or a software renderer) keeps up.
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 1.5));
+    this.renderer.setClearColor(0xe9edf2);
     const canvas = this.renderer.domElement;
     canvas.setAttribute('role', 'img');
     canvas.setAttribute('aria-label', o.label ?? '3D view of the cell');
@@ -67,6 +73,8 @@ export class SceneViewer {
     this.urdfs = new Map();
     /** @type {Map<string, any>} the target ghost of each arm, when there is one */
     this.ghosts = new Map();
+    /** @type {THREE.Group | null} a routine's path */
+    this.path = null;
 
     this.controls = new OrbitControls(this.camera, canvas);
     // One finger orbits, two pan and pinch-zoom (OrbitControls' touch defaults, stated here on purpose).
@@ -80,6 +88,9 @@ export class SceneViewer {
     this.frames = 0;
     this.visible = true;
     this.raf = 0;
+    /** @type {any} a frame put off to keep to MAX_FPS */
+    this.wait = 0;
+    this.lastFrame = -Infinity;
     this.disposed = false;
     this.resize = new ResizeObserver(() => this.fit());
     this.resize.observe(host);
@@ -105,12 +116,24 @@ export class SceneViewer {
     this.invalidate();
   }
 
-  /** Draw at the next frame (once, however many changes come before it), if the view is on screen. */
+  /**
+   * Draw at the next frame (once, however many changes come before it), if the view is on screen; at most
+   * MAX_FPS frames a second, so a moving arm leaves the page (its controls, its heartbeats) time to run.
+   */
   invalidate() {
-    if (this.disposed || this.raf || !this.visible || document.visibilityState === 'hidden') return;
+    if (this.disposed || this.raf || this.wait || !this.visible || document.visibilityState === 'hidden') return;
+    const early = this.lastFrame + 1000 / MAX_FPS - performance.now();
+    if (early > 1) {
+      this.wait = setTimeout(() => {
+        this.wait = 0;
+        this.invalidate();
+      }, early);
+      return;
+    }
     this.raf = requestAnimationFrame(() => {
       this.raf = 0;
       if (this.disposed) return;
+      this.lastFrame = performance.now();
       this.renderer.render(this.scene, this.camera);
       this.frames++;
     });
@@ -176,7 +199,8 @@ export class SceneViewer {
     let moved = false;
     for (const [name, v] of Object.entries(values)) {
       const j = arm.robot.joints[name];
-      if (j && j.setJointValue(v)) moved = true;
+      // Below a tenth of a milliradian (or millimetre) nothing visible moves: no frame for a standing arm's noise.
+      if (j && Math.abs(Number(j.angle) - v) >= MIN_CHANGE && j.setJointValue(v)) moved = true;
     }
     if (moved) this.invalidate();
     return moved;
@@ -216,6 +240,34 @@ export class SceneViewer {
     }
     for (const [name, v] of Object.entries(values)) ghost.joints[name]?.setJointValue(v);
     ghost.traverse(ghost.userData.glassy);
+    this.invalidate();
+  }
+
+  /**
+   * Draw a path of TCP positions given in the base frame of an arm (a routine's recorded poses), or none.
+   * @param {string | null} group @param {number[][]} points
+   */
+  setPath(group, points) {
+    if (this.path) {
+      this.scene.remove(this.path);
+      this.path.traverse((/** @type {any} */ o) => { o.geometry?.dispose(); o.material?.dispose(); });
+      this.path = null;
+    }
+    const src = group ? this.urdfs.get(group) : null;
+    if (src && points.length) {
+      const path = new THREE.Group();
+      path.position.set(src.base[0], src.base[1], src.base[2]);
+      path.rotation.set(0, 0, (src.base[3] * Math.PI) / 180);
+      const vs = points.map((p) => new THREE.Vector3(p[0], p[1], p[2]));
+      path.add(new THREE.Line(new THREE.BufferGeometry().setFromPoints(vs), new THREE.LineBasicMaterial({ color: PATH_COLOR })));
+      for (const v of vs) {
+        const dot = new THREE.Mesh(new THREE.SphereGeometry(0.008, 12, 8), new THREE.MeshStandardMaterial({ color: PATH_COLOR }));
+        dot.position.copy(v);
+        path.add(dot);
+      }
+      this.path = path;
+      this.scene.add(path);
+    }
     this.invalidate();
   }
 
@@ -265,6 +317,7 @@ export class SceneViewer {
   /** Show the shapes (markers) given, by key; others are removed. @param {Iterable<import('./logic.js').Shape>} list */
   setShapes(list) {
     const keep = new Set();
+    let changed = false;
     for (const s of list) {
       keep.add(s.key);
       let mesh = this.shapes.get(s.key);
@@ -277,7 +330,14 @@ export class SceneViewer {
         mesh.userData.shape = s.shape;
         this.shapes.set(s.key, mesh);
         this.scene.add(mesh);
+        changed = true;
       }
+      // A part lying still (its pose noise below MIN_CHANGE) needs no new frame.
+      const same = mesh.userData.last && [...s.position, ...s.quaternion, ...s.scale, ...s.color]
+        .every((v, i) => Math.abs(v - mesh.userData.last[i]) < MIN_CHANGE);
+      if (same) continue;
+      changed = true;
+      mesh.userData.last = [...s.position, ...s.quaternion, ...s.scale, ...s.color];
       mesh.position.fromArray(s.position);
       mesh.quaternion.fromArray(s.quaternion);
       mesh.scale.fromArray(s.scale);
@@ -286,8 +346,8 @@ export class SceneViewer {
       mat.transparent = s.color[3] < 1;
       mat.opacity = s.color[3];
     }
-    for (const [k, mesh] of this.shapes) if (!keep.has(k)) { this.#drop(mesh); this.shapes.delete(k); }
-    this.invalidate();
+    for (const [k, mesh] of this.shapes) if (!keep.has(k)) { this.#drop(mesh); this.shapes.delete(k); changed = true; }
+    if (changed) this.invalidate();
   }
 
   /** @param {THREE.Mesh} mesh */
@@ -333,6 +393,7 @@ export class SceneViewer {
   dispose() {
     this.disposed = true;
     if (this.raf) cancelAnimationFrame(this.raf);
+    if (this.wait) clearTimeout(this.wait);
     this.resize.disconnect();
     this.onScreen.disconnect();
     document.removeEventListener('visibilitychange', this.onVisibility);
