@@ -322,21 +322,23 @@ async function shutdown(code = 0) {
   stopping = true;
   for (const w of [...wakers]) w(); // a restart waiting out its back-off is dropped
   log('stopping...');
-  const deadline = Date.now() + 4500;
+  // Within 5 s: the signals until 3.8 s, then SIGKILL for what is left and time for it (and the watchdog's check)
+  // to finish: on a busy host a killed process takes a while to be reaped.
+  const t0 = Date.now();
   // Front first (BFF, launch, sim), then the master, so nodes can unregister cleanly.
   const procs = (names) => [...children.values()].filter((c) => names(c.name) && c.proc).map((c) => /** @type {any} */ (c.proc));
   const front = procs((n) => n !== 'roscore');
   front.forEach((p) => signalGroup(p.pid, 'SIGINT'));
-  await waitUntil(() => front.every(exited), Math.min(3000, deadline - Date.now()));
+  await waitUntil(() => front.every(exited), 2800);
   const core = procs((n) => n === 'roscore');
   if (core.length) {
     core.forEach((p) => signalGroup(p.pid, 'SIGTERM'));
-    await waitUntil(() => core.every(exited), Math.max(200, deadline - Date.now() - 500));
+    await waitUntil(() => core.every(exited), Math.max(200, t0 + 3800 - Date.now()));
   }
   // Whatever is left: leftovers of a child that was being restarted, nodes that ignored the signal...
   for (const pid of markedPids()) signal(pid, 'SIGKILL');
-  await waitUntil(() => markedPids().every((p) => !alive(p)), 400);
-  await stopWatchdog(Math.max(300, deadline - Date.now()));
+  await waitUntil(() => markedPids().every((p) => !alive(p)), 700);
+  await stopWatchdog(Math.max(400, t0 + 4800 - Date.now()));
   log('stopped');
   process.exit(code);
 }

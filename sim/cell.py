@@ -83,8 +83,8 @@ class Cell:
         return all(ok for ok, _ in results), results[0][1]
 
     def start(self) -> None:
-        for s in self.servers:
-            s.start()
+        # The ports open last, once the loop runs: a client that connects as soon as they accept (ur_rtde gives its
+        # control script 5 s to start) must not wait out the ROS start-up, which is slow on a busy host.
         # No video stream in the cell file: no render process at all.
         if self.opts.cameras and self.opts.devices.streams:
             from .cameras import CameraRig
@@ -106,6 +106,8 @@ class Cell:
                                self.ros.watched_views if self.ros else None)
         self._t0 = (time.monotonic(), self.loop.sim_time)
         self.loop.start(self.opts.speed)
+        for s in self.servers:
+            s.start()
 
     def stats(self) -> str:
         """One line of performance figures (the bench parses it): real-time factor, camera frames, render ms."""
