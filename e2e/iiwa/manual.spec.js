@@ -1,4 +1,4 @@
-// The iiwa cell's Manual page on a phone, through the real page, BFF, rosbridge, our driver's ros_control backend
+// The iiwa cell's Manual page, through the real page, BFF, rosbridge, our driver's ros_control backend
 // and the simulated iiwa driver (FollowJointTrajectory, the trajectory controller's command topic). The arm is
 // watched from outside the app: its own driver's joint states and our driver's TCP state, on the stack's rosbridge.
 import fs from 'node:fs';

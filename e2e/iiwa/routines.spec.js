@@ -1,4 +1,4 @@
-// The iiwa cell's routines on a phone: two poses and a vacuum action are taught, saved, and the routine replayed
+// The iiwa cell's routines: two poses and a vacuum action are taught, saved, and the routine replayed
 // from elsewhere passes through both poses within 1 mm (our driver's linear moves on the ros_control backend).
 import fs from 'node:fs';
 import yaml from 'js-yaml';

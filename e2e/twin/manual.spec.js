@@ -1,4 +1,4 @@
-// The twin-arm cell's Manual page on a phone: the motion group is chosen first, and each arm jogs (hold-to-run)
+// The twin-arm cell's Manual page: the motion group is chosen first, and each arm jogs (hold-to-run)
 // and stops on release while the other one stays still. The arms are watched from outside the app, on the
 // stack's rosbridge (/joint_states carries each arm's joints under the cell file's names).
 import fs from 'node:fs';

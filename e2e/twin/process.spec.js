@@ -1,26 +1,23 @@
-// The twin-arm cell's process on a phone: one cycle hands a cube over from the left arm (gripper) to the right arm
+// The twin-arm cell's process: one cycle hands a cube over from the left arm (gripper) to the right arm
 // (vacuum tool) through the stand, through the real page, BFF, process nodes, both robot drivers (ur_rtde) and the
 // simulated cell. Where the cube ends up is read from outside the app: the sim's ground truth (/sim/objects).
+// Cycle N takes cube and pocket (N - 1) mod 3, so each profile's run moves the next cube.
 import fs from 'node:fs';
 import yaml from 'js-yaml';
 import { test, expect } from '@playwright/test';
 import { loginAs } from '../lib/app.js';
 import { watchParts } from '../lib/robot.js';
+import { cycleEntry } from '../lib/process.js';
 
 const cell = /** @type {any} */ (yaml.load(fs.readFileSync(String(process.env.E2E_CELL_CONFIG), 'utf8')));
 const stations = cell.simulation.stations;
-const pocket = stations.find((/** @type {any} */ s) => s.kind === 'fixture').pockets[0];
+const pockets = stations.find((/** @type {any} */ s) => s.kind === 'fixture').pockets;
 const stand = stations.find((/** @type {any} */ s) => s.kind === 'stand');
 
-test('one cycle hands the first cube over from the left arm to the right arm and into its pocket', async ({ page }) => {
+test('one cycle hands the cycle\'s cube over from the left arm to the right arm and into its pocket', async ({ page }) => {
   test.setTimeout(240_000);
   const sim = await watchParts();
   try {
-    const near = (/** @type {number[]} */ [x, y], tol = 0.01) => {
-      const p = sim.parts()[0];
-      return Math.hypot(p.x - x, p.y - y) < tol;
-    };
-    expect(near(pocket, 0.05), 'the first cube starts away from the pocket').toBe(false);
     await loginAs(page, 'operator');
     await page.goto('/process');
     const state = page.getByTestId('process-state');
@@ -33,13 +30,18 @@ test('one cycle hands the first cube over from the left arm to the right arm and
     await expect(dialog.or(state.filter({ hasText: 'Running' }))).toBeVisible({ timeout: 15_000 });
     if (await dialog.isVisible()) await dialog.getByRole('button', { name: 'Start anyway' }).click();
     await expect(state).toHaveText('Running');
-    // The cube passes the stand (the left arm put it there), then ends in the right arm's first pocket.
+    const k = await cycleEntry(page, pockets.length);
+    const pocket = pockets[k];
+    const near = (/** @type {number[]} */ [x, y], tol = 0.01) => Math.hypot(sim.parts()[k].x - x, sim.parts()[k].y - y) < tol;
+    expect(near(pocket, 0.05), `cube ${k + 1} starts away from its pocket`).toBe(false);
+    // The cube passes the stand (the left arm put it there), then ends in the right arm's pocket.
     await expect.poll(() => near(stand.position, 0.02), { timeout: 120_000, intervals: [200] }).toBe(true);
     await expect(page.getByTestId('process-operation')).toContainText(/stand|fixture|home/, { timeout: 60_000 });
-    await expect(state).toHaveText('Idle', { timeout: 150_000 });
+    await expect(state).toHaveText(/Idle|Error/, { timeout: 150_000 });
+    expect(await state.textContent(), String(await page.getByTestId('process-message').textContent().catch(() => ''))).toBe('Idle');
     await expect(page.getByTestId('process-cycles-done')).toHaveText('1');
     await expect.poll(() => near(pocket, 0.005), { timeout: 5_000 }).toBe(true);
-    expect(sim.parts()[0].z).toBeLessThan(0.04);
+    expect(sim.parts()[k].z).toBeLessThan(0.04);
     await page.getByRole('button', { name: 'Release control' }).click();
   } finally {
     sim.close();

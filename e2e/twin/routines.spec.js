@@ -1,4 +1,4 @@
-// The twin-arm cell's routines on a phone: a routine is taught for the motion group chosen on the Routines page
+// The twin-arm cell's routines: a routine is taught for the motion group chosen on the Routines page
 // (the right arm, with its own tool, the vacuum), and running it moves that arm through the taught poses while
 // the other arm stays still. The arms are watched from outside the app, on the stack's rosbridge.
 import fs from 'node:fs';
