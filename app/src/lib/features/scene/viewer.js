@@ -19,6 +19,26 @@ const MAX_FPS = 30;
 const MIN_CHANGE = 1e-4;
 const VSYNC_SLACK_MS = 8;
 
+/**
+ * The same colour without specular or physically based shading: per pixel the cheapest lit material, which matters
+ * where WebGL runs in software (phones' fallbacks, hosts without a GPU). @param {any} m
+ */
+function matte(m) {
+  if (!m || m.isMeshLambertMaterial || m.isMeshBasicMaterial || !m.color) return m;
+  const out = new THREE.MeshLambertMaterial({ color: m.color, transparent: m.transparent, opacity: m.opacity, side: m.side });
+  out.name = m.name;
+  m.dispose();
+  return out;
+}
+
+/** @template {THREE.Object3D} T @param {T} root @returns {T} */
+function matteAll(root) {
+  root.traverse((/** @type {any} */ o) => {
+    if (o.isMesh) o.material = Array.isArray(o.material) ? o.material.map(matte) : matte(o.material);
+  });
+  return root;
+}
+
 /** Whether this browser can draw WebGL at all. */
 export function webglAvailable() {
   try {
@@ -174,19 +194,20 @@ export class SceneViewer {
         done(null, e instanceof Error ? e : new Error(String(e)));
       };
       if (ext === 'stl') {
-        new STLLoader(m).load(path, (geom) => done(new THREE.Mesh(geom, material)), undefined, fail);
+        new STLLoader(m).load(path, (geom) => done(new THREE.Mesh(geom, matte(material))), undefined, fail);
       } else if (ext === 'dae') {
-        new ColladaLoader(m).load(path, (dae) => done(dae?.scene ?? null), undefined, fail);
+        new ColladaLoader(m).load(path, (dae) => done(dae?.scene ? matteAll(dae.scene) : null), undefined, fail);
       } else if (ext === 'obj') {
         new OBJLoader(m).load(path, (obj) => {
-          obj.traverse((c) => { if (/** @type {any} */ (c).isMesh) /** @type {any} */ (c).material = material; });
+          const mat = matte(material);
+          obj.traverse((c) => { if (/** @type {any} */ (c).isMesh) /** @type {any} */ (c).material = mat; });
           done(obj);
         }, undefined, fail);
       } else {
         fail(new Error(`unsupported mesh format .${ext}`));
       }
     };
-    const robot = loader.parse(urdf);
+    const robot = matteAll(loader.parse(urdf));
     // Draw the joints as reported, even past a limit the URDF states.
     for (const j of Object.values(robot.joints)) /** @type {any} */ (j).ignoreLimits = true;
     return robot;
@@ -234,7 +255,7 @@ export class SceneViewer {
       const glassy = (/** @type {any} */ o) => {
         if (!o.isMesh || o.userData.ghost) return;
         o.userData.ghost = true;
-        o.material = new THREE.MeshStandardMaterial({ color: GHOST_COLOR, transparent: true, opacity: 0.35, depthWrite: false });
+        o.material = new THREE.MeshLambertMaterial({ color: GHOST_COLOR, transparent: true, opacity: 0.35, depthWrite: false });
       };
       ghost.traverse(glassy);
       ghost.userData.glassy = glassy;
@@ -264,7 +285,7 @@ export class SceneViewer {
       const vs = points.map((p) => new THREE.Vector3(p[0], p[1], p[2]));
       path.add(new THREE.Line(new THREE.BufferGeometry().setFromPoints(vs), new THREE.LineBasicMaterial({ color: PATH_COLOR })));
       for (const v of vs) {
-        const dot = new THREE.Mesh(new THREE.SphereGeometry(0.008, 12, 8), new THREE.MeshStandardMaterial({ color: PATH_COLOR }));
+        const dot = new THREE.Mesh(new THREE.SphereGeometry(0.008, 12, 8), new THREE.MeshLambertMaterial({ color: PATH_COLOR }));
         dot.position.copy(v);
         path.add(dot);
       }
@@ -329,7 +350,7 @@ export class SceneViewer {
         const geom = s.shape === 'sphere' ? new THREE.SphereGeometry(0.5, 20, 14)
           : s.shape === 'cylinder' ? new THREE.CylinderGeometry(0.5, 0.5, 1, 24).rotateX(Math.PI / 2) // ROS: along z
             : new THREE.BoxGeometry(1, 1, 1);
-        mesh = new THREE.Mesh(geom, new THREE.MeshStandardMaterial({ roughness: 0.7 }));
+        mesh = new THREE.Mesh(geom, new THREE.MeshLambertMaterial());
         mesh.userData.shape = s.shape;
         this.shapes.set(s.key, mesh);
         this.scene.add(mesh);
@@ -344,7 +365,7 @@ export class SceneViewer {
       mesh.position.fromArray(s.position);
       mesh.quaternion.fromArray(s.quaternion);
       mesh.scale.fromArray(s.scale);
-      const mat = /** @type {THREE.MeshStandardMaterial} */ (mesh.material);
+      const mat = /** @type {THREE.MeshLambertMaterial} */ (mesh.material);
       mat.color.setRGB(s.color[0], s.color[1], s.color[2]);
       mat.transparent = s.color[3] < 1;
       mat.opacity = s.color[3];
