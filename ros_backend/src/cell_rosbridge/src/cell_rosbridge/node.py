@@ -1,6 +1,7 @@
 """The rosbridge_server node: parameters, ROS init, tornado loop, clean shutdown."""
 from __future__ import annotations
 
+import faulthandler
 import logging
 import os
 import signal
@@ -12,6 +13,7 @@ import tornado.ioloop
 
 from . import capabilities
 from .protocol import BridgeConfig, BridgeContext
+from .ros_plumbing import publish_without_yield
 from .websocket_server import Janitor, RosbridgeHandler, make_app
 
 log = logging.getLogger("rosbridge")
@@ -33,6 +35,9 @@ def main(argv: Any = None) -> None:
     # Our own signal handling: rospy's handler runs hooks inside the signal frame, where tornado's
     # add_callback does not wake the loop (it thinks it is on the loop thread), so SIGINT would hang.
     rospy.init_node("rosbridge_websocket", argv=argv, disable_signals=True)
+    # `kill -USR1 <pid>`: every thread's Python stack on stderr (a stalled loop shows what it waits for).
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
+    publish_without_yield()  # publishes run on the loop thread (see there)
     # rospy already configured the root logger (ROS log file); also show our own lines on stderr,
     # where roslaunch output="screen" and process supervisors pick them up.
     handler = logging.StreamHandler(sys.stderr)

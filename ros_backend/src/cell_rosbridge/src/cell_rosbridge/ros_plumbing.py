@@ -26,6 +26,42 @@ class TopicError(ValueError):
     pass
 
 
+def _queued_write(self: Any, data: Any) -> bool:
+    """rospy's QueuedConnection.write_data without its trailing time.sleep(0)."""
+    with self._lock:
+        if self._error:  # an error of the connection's sending thread surfaces here, as in rospy
+            error = self._error
+            self._error = None
+            raise error
+        if self._queue_size > 0 and len(self._queue) == self._queue_size:
+            del self._queue[0]
+        self._queue.append(data)
+        self._cond_data_available.notify()
+    return True
+
+
+def publish_without_yield() -> bool:
+    """Make rospy's queued publish return without yielding the GIL; True when applied.
+
+    rospy ends every queued write with time.sleep(0) so the connection's sending thread runs at once. Here every
+    client's publish runs on the WebSocket loop thread, and each sleep(0) hands the GIL to one of dozens of busy
+    threads: the loop then waits up to a switch interval (5 ms) to get it back. 25 clients at 100 Hz beside the
+    simulated cell made that ~200 publishes a second at most; the loop fell behind its input for good and sent
+    nobody anything (the soak's 'silent' clients). Without the sleep the sending thread is still notified and runs
+    at the next switch. Applied only to the rospy this was written against (the method as described).
+    """
+    from rospy.impl.tcpros_pubsub import QueuedConnection
+    current = QueuedConnection.write_data
+    if current is _queued_write:
+        return True
+    names = set(getattr(current, "__code__", None).co_names) if hasattr(current, "__code__") else set()
+    if not {"sleep", "_cond_data_available", "_queue_size", "_error"} <= names:
+        log.warning("rospy's QueuedConnection.write_data is not the one expected: left as it is")
+        return False
+    QueuedConnection.write_data = _queued_write  # type: ignore[method-assign]
+    return True
+
+
 def master_topic_types() -> Dict[str, str]:
     """topic -> type for every topic the master knows (published or subscribed)."""
     master = rosgraph.Master(rospy.get_name() or "/rosbridge")
