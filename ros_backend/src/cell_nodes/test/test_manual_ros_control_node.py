@@ -169,7 +169,8 @@ def stack(roscore: str, tmp_path_factory) -> Iterator[Stack]:
         output = nodes.output("manual_ros_control")
         assert f"manual motion driver (ros_control) for {CONTROLLER}; groups: arm; tools: vacuum" in output, \
             output[-3000:]
-        assert sim_took < 2.0, f"the simulated driver took {sim_took:.2f} s to exit on SIGTERM"
+        # 3 s: 2.07 s seen in CI with both cores busy
+        assert sim_took < 3.0, f"the simulated driver took {sim_took:.2f} s to exit on SIGTERM"
         assert "Traceback" not in sim.output(), sim.output()[-3000:]
 
 
