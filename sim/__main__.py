@@ -82,10 +82,15 @@ def parse_args(argv: Optional[list[str]] = None) -> CellOptions:
     ap.add_argument("--no-ros", action="store_true")
     ap.add_argument("--power-off", action="store_true",
                     help="boot like a real arm: powered off with brakes on (power on + brake release needed)")
+    ap.add_argument("--program-start", type=float, default=0.05, metavar="S",
+                    help="seconds from a script upload or play until the program runs (a real controller compiles "
+                         "it first; tests use a slow one)")
     ap.add_argument("--log-level", default="INFO")
     a = ap.parse_args(argv)
     if a.speed <= 0 or a.camera_rate <= 0 or a.sensor_rate <= 0:
         ap.error("--speed, --camera-rate and --sensor-rate must be positive")
+    if a.program_start < 0:
+        ap.error("--program-start must not be negative")
     path = a.cell or default_cell_path()
     try:
         doc = read_cell_file(path)
@@ -102,7 +107,8 @@ def parse_args(argv: Optional[list[str]] = None) -> CellOptions:
         f"{g} ({devices.world.arm(g).tool.kind}) on {h}" for g, h in hosts.items()))
     return CellOptions(host=next(iter(hosts.values())), hosts=hosts, seed=a.seed, speed=a.speed, camera_size=a.camera_size,
                        camera_rate=a.camera_rate, sensor_rate=a.sensor_rate, cameras=not a.no_cameras,
-                       ros=not a.no_ros, powered=not a.power_off, devices=devices)
+                       ros=not a.no_ros, powered=not a.power_off, devices=devices,
+                       program_start=a.program_start)
 
 
 def simulation_kind(argv: Optional[list[str]]) -> Optional[str]:

@@ -39,6 +39,7 @@ class CellOptions:
     cameras: bool = True
     ros: bool = True
     powered: bool = True
+    program_start: float = 0.05   # s of sim time from a script upload or play until the program runs
     # The cell file's devices (parse_args reads the file); the default declares none, so nothing is published.
     devices: CellDevices = field(default_factory=CellDevices)
 
@@ -55,7 +56,7 @@ class Cell:
         self.servers: list[TcpServer] = []
         for arm, ids in zip(self.world.arms, fault_ids):
             ctl = Controller(self.world, boot_powered=opts.powered, body=arm, lock=self.lock, faults=self.faults,
-                             fault_ids=ids)
+                             fault_ids=ids, program_start=opts.program_start)
             host = (opts.hosts or {}).get(arm.group, opts.host)
             self.controllers[arm.group], self.hosts[arm.group] = ctl, host
             self.servers += [RTDEServer(host, ctl), DashboardServer(host, ctl)]

@@ -149,8 +149,10 @@ class Arm:
 class Controller:
     def __init__(self, world: World, boot_powered: bool = True, body: Optional[RobotArm] = None,
                  lock: Optional[threading.RLock] = None, faults: Optional[FaultBook] = None,
-                 fault_ids: Optional[dict[str, str]] = None) -> None:
+                 fault_ids: Optional[dict[str, str]] = None,
+                 program_start: float = PROGRAM_START_DELAY) -> None:
         self.world = world
+        self.program_start = program_start
         self.body = body if body is not None else world.arms[0]
         self.tool = self.body.spec.tool
         self.lock = lock if lock is not None else threading.RLock()
@@ -376,7 +378,7 @@ class Controller:
                 self.stop_program()
             # Like a real controller (which compiles first), start a little later: this also lets the
             # client's register clear, sent just before the upload on another socket, land first.
-            self._pending_program = (self.sim_time + PROGRAM_START_DELAY, program)
+            self._pending_program = (self.sim_time + self.program_start, program)
             return True
 
     def _start_pending_program(self) -> None:

@@ -138,6 +138,14 @@ def test_cell_option_then_cell_config_then_demo_cell(monkeypatch: pytest.MonkeyP
     assert opts.devices.path == str(RENAMED) and len(opts.devices.streams) == 3
 
 
+def test_program_start_option(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("CELL_CONFIG", raising=False)
+    assert parse_args([]).program_start == 0.05
+    assert parse_args(["--program-start", "3"]).program_start == 3.0
+    with pytest.raises(SystemExit):
+        parse_args(["--program-start", "-1"])
+
+
 def test_cli_refuses_an_unreadable_cell_file_without_traceback(tmp_path: Path) -> None:
     bad = tmp_path / "bad.yaml"
     bad.write_text("video: {streams: [{name: a, topic: /a, view: ceiling}]}\n")

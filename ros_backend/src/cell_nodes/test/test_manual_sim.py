@@ -26,6 +26,7 @@ from nodes_helpers import start_sim
 
 HOST = "127.0.0.51"          # the module's sim
 RESTART_HOST = "127.0.0.52"  # the reconnection test's own sim
+SLOW_HOST = "127.0.0.53"     # a controller slow to start programs
 SECTION = yaml.safe_load((Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml").read_text())["manual"]
 CONFIGS = {name: list(q) for name, q in SECTION["groups"][0]["configurations"].items()}
 HEARTBEAT_S = 0.05           # the page's jog heartbeat period
@@ -317,6 +318,28 @@ def test_reconnects_after_the_controller_restarts() -> None:
         assert driver.state().message == f"reconnected to the robot controller at {RESTART_HOST}"
         ok, why = driver.move_named("arm", "pick_approach", 1.0, 1.5)
         assert (ok, why) == (True, "arrived at pick_approach")
+    finally:
+        driver.shutdown()
+        sim.stop()
+
+
+def test_the_node_keeps_reading_the_arm_while_a_slow_controller_starts_the_control_script() -> None:
+    """ur_rtde's control client, made the usual way, holds the GIL until its script runs: the whole node froze for
+    that long (5.5 s seen on a loaded host), no poll and no jog watchdog ran, and the frozen poll counted the controller
+    as lost. The driver starts the script itself and waits for it without holding anything."""
+    sim = start_sim(SLOW_HOST, "--no-ros", "--no-cameras", "--program-start", "3")
+    driver = make_driver(SLOW_HOST)
+    samples: list[float] = []
+    driver.on_sample = lambda snap: samples.append(time.monotonic())
+    try:
+        t0 = time.monotonic()
+        ok, why = driver.move_named("arm", "pick_approach", 1.0, 1.5)
+        assert (ok, why) == (True, "arrived at pick_approach")
+        took = time.monotonic() - t0
+        assert took > 3.0, f"the move took {took:.2f} s: the sim did not make the script start slowly"
+        gaps = np.diff([t for t in samples if t >= t0])
+        assert gaps.max() < 0.5, f"the driver stopped reading the arm for {gaps.max():.2f} s while the script started"
+        assert driver.state().connected
     finally:
         driver.shutdown()
         sim.stop()

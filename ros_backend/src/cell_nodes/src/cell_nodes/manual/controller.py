@@ -129,7 +129,10 @@ class UrRtdeConnector:
 
     def control(self, host: str) -> ControlInterface:
         import rtde_control
-        return rtde_control.RTDEControlInterface(host)
+        # Made without uploading the script: the constructor holds the GIL until the script runs, which froze the
+        # whole node (every arm's jog watchdog, every poll) for as long as that took. The driver starts the script
+        # with reuploadScript and waits for it itself (see ManualDriver._control).
+        return rtde_control.RTDEControlInterface(host, -1.0, int(rtde_control.RTDEControlInterface.FLAG_NO_WAIT))
 
     def dashboard(self, host: str) -> DashboardInterface:
         import dashboard_client

@@ -42,6 +42,7 @@ JOINT_TOLERANCE = 0.005     # rad: a joint move has arrived (the spec asks 0.01)
 POSITION_TOLERANCE = 0.001  # m: a linear move has arrived
 ANGLE_TOLERANCE = 0.005     # rad
 POLL_S = 0.01               # how often a waiting service call looks at the robot
+SCRIPT_START_S = 10.0       # from uploading the control script until it runs
 STALE_S = 1.0               # RTDE data that stopped changing this long means the controller is gone
 MOVABLE_SAFETY = ("NORMAL", "REDUCED")
 NAMED, RELATIVE, POSE = "named", "relative", "pose"   # the kinds of move (MoveRequest.kind)
@@ -316,23 +317,28 @@ class ManualDriver:
                     ctl = run_with_timeout(lambda: self._connector.control(self.host), 10.0, "ur-control")
                 except Exception as e:
                     raise Refused(f"cannot start the control script on the robot controller at {self.host}: {e}")
-                self._tcp_offset = list(self._call(ctl.getTCPOffset))
                 with self._cmd_lock:
-                    if not self._connected:  # lost while the script was starting
+                    if not self._connected:  # lost while the client was being made
                         self._dispose_later((ctl,))
                         raise Refused(self._unreachable())
                     self._ctl = ctl
-                return ctl
-            if self._call(ctl.isProgramRunning):
-                return ctl
-            log.info("control script not running: uploading it again")
-            if not self._call(ctl.reuploadScript, timeout=5.0):
-                raise Refused("the robot's control script could not be started (is the robot in remote control?)")
-            deadline = self.clock() + 3.0
-            while not self._call(ctl.isProgramRunning):
-                if self.clock() > deadline:
-                    raise Refused("the robot's control script did not start (is the robot in remote control?)")
-                self.sleep(POLL_S)
+                fresh = True
+            else:
+                fresh = False
+            # A fresh client starts its script, taking the controller over as ur_rtde's own constructor would.
+            if fresh or not self._call(ctl.isProgramRunning):
+                log.info("starting the control script" if fresh else "control script not running: uploading it again")
+                if not self._call(ctl.reuploadScript, timeout=5.0):
+                    raise Refused("the robot's control script could not be started (is the robot in remote "
+                                  "control?)")
+                # The controller compiles and starts it; a loaded host has taken 5.5 s.
+                deadline = self.clock() + SCRIPT_START_S
+                while not self._call(ctl.isProgramRunning):
+                    if self.clock() > deadline:
+                        raise Refused("the robot's control script did not start (is the robot in remote control?)")
+                    self.sleep(POLL_S)
+            if fresh:
+                self._tcp_offset = list(self._call(ctl.getTCPOffset))
             return ctl
 
     def _call(self, fn: Callable[[], T], timeout: Optional[float] = None) -> T:
