@@ -512,6 +512,8 @@ async function main() {
     const lo = Math.min(...xs); const hi = Math.max(...xs);
     const ratio = xs.length ? hi / lo : NaN;
     const trend = slope(xs);
+    const anon = judged.map((r) => r.processes[name]?.anonMiB).filter(Number.isFinite);
+    const anonLo = Math.min(...anon); const anonHi = Math.max(...anon);
     const restarts = procs.restarts.get(name) || 0;
     let v;
     if (procs.gone.has(name)) v = `FAIL: gone in minute ${procs.gone.get(name)}`;
@@ -520,8 +522,10 @@ async function main() {
     else if (xs.length < 2) v = 'n/a: fewer than 2 minutes after the warm-up';
     else if (indicative) v = `${ratio <= FLAT ? 'PASS' : 'FAIL'} (indicative: ${MINUTE_MS / 1000} s minutes)`;
     else v = ratio <= FLAT ? 'PASS' : 'FAIL';
-    rssVerdict[name] = { startMiB: startRss[name], minute1MiB: minutes[0]?.processes[name]?.rssMiB, minMiB: lo, maxMiB: hi, lastMiB: xs.at(-1), ratio, trendMiBPerMin: trend, restarts, verdict: v };
-    judge(`RSS flat within 10 %: ${name}`, xs.length ? `${f1(lo)}-${f1(hi)} MiB, max/min ${Number.isFinite(ratio) ? ratio.toFixed(3) : '-'}, trend ${Number.isFinite(trend) ? (trend >= 0 ? '+' : '') + trend.toFixed(2) : '-'} MiB/min` : '-', v);
+    rssVerdict[name] = { startMiB: startRss[name], minute1MiB: minutes[0]?.processes[name]?.rssMiB, minMiB: lo, maxMiB: hi, lastMiB: xs.at(-1), ratio, trendMiBPerMin: trend,
+      anonMinMiB: anonLo, anonMaxMiB: anonHi, anonTrendMiBPerMin: slope(anon), restarts, verdict: v };
+    judge(`RSS flat within 10 %: ${name}`, xs.length ? `${f1(lo)}-${f1(hi)} MiB, max/min ${Number.isFinite(ratio) ? ratio.toFixed(3) : '-'}, trend ${Number.isFinite(trend) ? (trend >= 0 ? '+' : '') + trend.toFixed(2) : '-'} MiB/min` +
+      (anon.length ? `; private ${f1(anonLo)}-${f1(anonHi)}` : '') : '-', v);
   }
 
   // Logs

@@ -660,7 +660,14 @@ export function procName(pid) {
   return path.basename(script || argv[0] || String(pid));
 }
 
-const rssKb = (pid) => { try { return Number(/VmRSS:\s+(\d+)/.exec(fs.readFileSync(`/proc/${pid}/status`, 'utf8'))[1]); } catch { return NaN; } };
+/** VmRSS and its private (anonymous) part, kB: file-backed pages (the program's own code paged in as new paths run)
+ * count in RSS but are not memory the process holds on to. @returns {[number, number]} */
+const memKb = (pid) => {
+  try {
+    const st = fs.readFileSync(`/proc/${pid}/status`, 'utf8');
+    return [Number(/VmRSS:\s+(\d+)/.exec(st)[1]), Number(/RssAnon:\s+(\d+)/.exec(st)[1])];
+  } catch { return [NaN, NaN]; }
+};
 const cpuTicks = (pid) => { try { const s = fs.readFileSync(`/proc/${pid}/stat`, 'utf8'); const f = s.slice(s.lastIndexOf(') ') + 2).split(' '); return Number(f[11]) + Number(f[12]); } catch { return NaN; } };
 
 /** Every process of one stack (pidsOfStack), grouped by name: RSS samples per minute, CPU, restarts. */
@@ -673,6 +680,8 @@ export class ProcWatch {
     this.pidsOf = new Map();
     /** @type {Map<string, number[]>} this minute's RSS samples (MiB) */
     this.samples = new Map();
+    /** @type {Map<string, number[]>} this minute's RssAnon samples (MiB) */
+    this.anon = new Map();
     /** @type {Map<number, number>} CPU ticks at the minute's start (or when first seen) */
     this.ticks0 = new Map();
     this.restarts = new Map();
@@ -721,9 +730,10 @@ export class ProcWatch {
       }
       this.pidsOf.set(name, key);
       for (const p of pids) if (!this.ticks0.has(p)) this.ticks0.set(p, 0);
-      const kb = pids.map(rssKb).filter(Number.isFinite).reduce((a, b) => a + b, 0);
-      if (!this.samples.has(name)) this.samples.set(name, []);
-      this.samples.get(name).push(kb / 1024);
+      const mem = pids.map(memKb).filter(([r]) => Number.isFinite(r));
+      if (!this.samples.has(name)) { this.samples.set(name, []); this.anon.set(name, []); }
+      this.samples.get(name).push(mem.reduce((a, [r]) => a + r, 0) / 1024);
+      this.anon.get(name).push(mem.reduce((a, [, an]) => a + an, 0) / 1024);
     }
     for (const [name, key] of this.pidsOf) {
       if (!g.has(name) && key !== '') {
@@ -744,9 +754,11 @@ export class ProcWatch {
         const t = cpuTicks(p);
         if (Number.isFinite(t)) { ticks += t - (this.ticks0.get(p) ?? 0); this.ticks0.set(p, t); }
       }
-      out[name] = { rssMiB: median(xs), rssMaxMiB: Math.max(...xs), cpuPct: ((ticks / 100) / elapsedS) * 100, pids: pids.length };
+      out[name] = { rssMiB: median(xs), rssMaxMiB: Math.max(...xs), anonMiB: median(this.anon.get(name) || []),
+        cpuPct: ((ticks / 100) / elapsedS) * 100, pids: pids.length };
     }
     this.samples = new Map();
+    this.anon = new Map();
     return out;
   }
 }
