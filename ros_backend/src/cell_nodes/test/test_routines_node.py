@@ -179,6 +179,8 @@ def test_record_save_run_stop_through_ros(cell: Cell) -> None:
     assert near1 < 0.001 and dist(final, r2.step.pose) < 0.001
     assert gripper_closed()
     assert "gripper close done" in [m.message for m in robot.since(t0)]
+    # The service answers, then the node publishes "idle": the message may still be on its way.
+    wait_for(lambda: run_state.msg.state == "idle", 5, what="the run state back to idle")
     states = [(m.state, m.step, m.total) for m in run_state.since(t0)]
     assert states == [("running", 0, 3), ("running", 1, 3), ("running", 2, 3), ("running", 3, 3), ("idle", 0, 3)]
     wait_for(lambda: log.msg.entries[-1].text == "Routine pick two done", 5, what="the log's last entry")
@@ -213,8 +215,8 @@ def test_record_save_run_stop_through_ros(cell: Cell) -> None:
     assert stop_answer < 1.5
     here = pose_now()
     assert min(dist(here, r1.step.pose), dist(here, r2.step.pose)) > 0.002  # stopped on the way, not at a target
-    assert (run_state.msg.state, run_state.msg.step, run_state.msg.message) == \
-        ("idle", 0, "routine back and forth stopped")
+    wait_for(lambda: (run_state.msg.state, run_state.msg.step, run_state.msg.message) ==
+             ("idle", 0, "routine back and forth stopped"), 5, what="the run state: idle after the stop")
     wait_for(lambda: re.fullmatch(r"Routine back and forth stopped at step [234] of 4", log.msg.entries[-1].text), 5,
              what="the stop in the log")
     assert log.msg.entries[-1].level == "warning"
