@@ -662,6 +662,26 @@ def test_tool_change_sequence_with_a_move(robot: FakeRobot) -> None:
     assert names.index("moveJ") < names.index("setStandardDigitalOut")
 
 
+def test_a_dwell_is_timed_on_the_controllers_clock(robot: FakeRobot) -> None:
+    # A simulated controller at half real time (an overloaded host): the dwell lasts its 1 s of controller time.
+    section = demo_section()
+    section["tools"].append({"name": "clamp", "actions": [{"name": "settle", "steps": [{"wait_s": 1.0}]}]})
+    clock = FakeClock()
+    d = make_driver(robot, section, clock=clock)
+    assert d.connect()
+    FakeReceive.getTimestamp, saved = (lambda self: clock.t * 0.5), FakeReceive.getTimestamp
+    try:
+        t0 = clock.t
+        assert d.tool_action("clamp", "settle") == (True, "clamp settle done")
+        assert 2.0 <= clock.t - t0 < 2.1
+        FakeReceive.getTimestamp = lambda self: 7.0  # a controller clock that stands still: 3x + 1 s at most
+        t0 = clock.t
+        assert d.tool_action("clamp", "settle") == (True, "clamp settle done")
+        assert 4.0 <= clock.t - t0 < 4.1
+    finally:
+        FakeReceive.getTimestamp = saved
+
+
 def test_script_reuploaded_after_a_protective_stop(robot: FakeRobot, driver: ManualDriver) -> None:
     assert driver.move_named("arm", "home")[0]
     robot.runtime = 1  # the control script ended (protective stop, since cleared)

@@ -174,6 +174,7 @@ class ManualDriver:
         self._io: Optional[IOInterface] = None
         self._ctl: Optional[ControlInterface] = None
         self._tcp_offset: list[float] = [0.0] * 6
+        self._offset_known = False
         self._levers: dict[tuple[int, tuple[float, ...]], float] = {}
         self._connected = False
         self._was_connected = False
@@ -322,6 +323,7 @@ class ManualDriver:
                         self._dispose_later((ctl,))
                         raise Refused(self._unreachable())
                     self._ctl = ctl
+                    self._offset_known = False
                 fresh = True
             else:
                 fresh = False
@@ -337,8 +339,9 @@ class ManualDriver:
                     if self.clock() > deadline:
                         raise Refused("the robot's control script did not start (is the robot in remote control?)")
                     self.sleep(POLL_S)
-            if fresh:
+            if not self._offset_known:  # (read through the script: once it runs)
                 self._tcp_offset = list(self._call(ctl.getTCPOffset))
+                self._offset_known = True
             return ctl
 
     def _call(self, fn: Callable[[], T], timeout: Optional[float] = None) -> T:
@@ -780,10 +783,14 @@ class ManualDriver:
             raise Refused(self._end_reason)
 
     def _wait(self, token: int, seconds: float) -> None:
-        end = self.clock() + seconds
-        while self.clock() < end:
+        """A tool action's dwell, timed on the controller's clock (its RTDE timestamp), the time the tool lives in: a
+        real controller keeps real time, a simulated one that falls behind on a loaded host (0.82 seen in the soak)
+        still gets the whole dwell, so its fingers have opened before the arm lifts. At most 3x + 1 s of our clock."""
+        start = self._read().timestamp
+        wall_end = self.clock() + 3.0 * seconds + 1.0
+        while self._read().timestamp - start < seconds and self.clock() < wall_end:
             self._check_token(token)
-            self.sleep(min(POLL_S, max(0.0, end - self.clock())))
+            self.sleep(POLL_S)
         self._check_token(token)
 
     def _wait_input(self, token: int, label: str, step: WaitInput) -> None:
