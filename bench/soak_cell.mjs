@@ -283,6 +283,7 @@ export class CameraViewer {
 /** A jog moved the arm: the joint travelled more than this (a 1 s jog at half speed: ~0.2-0.5 rad; a loaded host
  * delays the 50 ms heartbeats past the driver's 0.2 s timeout and the jog stutters, see the minimum per minute). */
 export const MOVED_RAD = 0.005;
+const START_WAIT_MS = 5000;
 
 /** The Manual page of one motion group (an admin): state, jog, moves. */
 export class ManualSession {
@@ -318,8 +319,9 @@ export class ManualSession {
   q() { return Array.isArray(this.state?.joint_positions) ? [...this.state.joint_positions] : null; }
 
   /**
-   * One hold-to-run jog of a joint: the command at once and every 50 ms for holdMs, then direction 0; the arm's
-   * travel read from the driver's state once it stopped.
+   * One hold-to-run jog of a joint: the command at once and every 50 ms, held for holdMs once the arm moves, as an
+   * operator holds the button (the first motion after the control script (re)starts waits for it: up to
+   * START_WAIT_MS); then direction 0; the arm's travel read from the driver's state once it stopped.
    * @returns {Promise<{moved: boolean, travel: number, why: string}>}
    */
   async jog(axis, direction, holdMs, fraction = 0.5) {
@@ -330,7 +332,12 @@ export class ManualSession {
     const t0 = now();
     let sent = 0;
     let k = 0;
-    while (now() - t0 < holdMs) {
+    let movedAt = 0;
+    while (movedAt ? now() - movedAt < holdMs : now() - t0 < START_WAIT_MS) {
+      if (!movedAt) {
+        const q = this.q();
+        if (q0 && q && Math.abs(q[axis] - q0[axis]) > MOVED_RAD) movedAt = now();
+      }
       if (this.link.publish('/cell/manual/jog', msg)) sent++;
       k++;
       await sleep(Math.max(0, t0 + k * 50 - now()));
