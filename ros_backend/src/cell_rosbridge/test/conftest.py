@@ -4,6 +4,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import tempfile
 from typing import Callable, Iterator, List
 
 import pytest
@@ -24,8 +25,11 @@ def ros_node(roscore: str) -> str:
 @pytest.fixture(scope="session")
 def rosapi(roscore: str) -> Iterator[subprocess.Popen]:
     import rosgraph
-    proc = subprocess.Popen([sys.executable, str(ROSAPI)], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True)
+    # Its stderr is kept, with every ResourceWarning shown: a socket left to the garbage collector is a leak there.
+    stderr = tempfile.NamedTemporaryFile(prefix="rosapi-stderr-", suffix=".log", delete=False)
+    proc = subprocess.Popen([sys.executable, str(ROSAPI)], stdout=subprocess.DEVNULL, stderr=stderr,
+                            env=dict(os.environ, PYTHONWARNINGS="always::ResourceWarning"), start_new_session=True)
+    proc.stderr_path = stderr.name  # type: ignore[attr-defined]
     master = rosgraph.Master("/rb_test")
     wait_for(lambda: any(s == "/rosapi/topics_and_raw_types" for s, _ in master.getSystemState()[2]),
              20, what="rosapi services")
