@@ -15,8 +15,8 @@ from rosapi.msg import TypeDef
 
 # One master proxy for every service thread, one call at a time. rospy serves each call on a new thread, and an
 # XML-RPC connection (http.client) is not safe to share. A proxy per thread (the earlier way) left each thread's
-# socket to the garbage collector: its "unclosed socket" ResourceWarning text (unique per port) piled up in a
-# warnings registry, ~250 B per call, a steady leak in the soak. Master queries take about a millisecond.
+# socket to the garbage collector; tracemalloc showed its buffers retained, ~250 B per call, a steady leak in the
+# soak. Master queries take about a millisecond.
 class _SharedMaster:
     def __init__(self) -> None:
         self._lock = threading.Lock()
