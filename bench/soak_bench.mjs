@@ -30,11 +30,10 @@
 // move), and the lease lets one session at a time command motion. So the two take turns, as a shift would:
 // the process runs until the fixture is full (the demo cell's pose tables have 3 entries: 3 cycles fill its 3
 // pockets, a 4th would pick at an empty place); the operator releases control; the admin takes it, jogs (2 pairs,
-// ~6 s), and puts the 3 parts back where the process picks them with the Manual page's Move to pose and gripper
-// buttons (the sim has no feeder; a real cell has the parts restocked), then home, and releases control; the
-// operator takes it and starts again. The manual session's turn comes first. A round takes about 1.5 min (3
-// cycles of ~13 s, ~7 s of jogging, ~45 s putting parts back, on 2 cores shared with an e2e run): ~2 cycles and
-// ~3 jogs a minute. A run that ends in error counts as a process error; after 3 in a row no more Starts.
+// ~6 s) and releases control; the sim's feeder (/sim/restock, called on rosbridge directly: it is the world's, not
+// a user's) puts the 3 parts back where the process picks them, as a feeder or an operator refilling a real cell
+// would; the operator takes control and starts again. The manual session's turn comes first. A round takes about
+// 50 s (3 cycles of ~13 s, ~7 s of jogging): ~3.5 cycles and ~2.5 jog windows a minute. A run that ends in error counts as a process error; after 3 in a row no more Starts.
 // At the end (after the last minute): the operator stops the process if it runs (Stop needs no lease), the admin
 // takes control, clears the arm (as above) and jogs once more: "can still take the lease, and the jog moves the arm".
 //
@@ -69,7 +68,7 @@ import path from 'node:path';
 import { WebSocket } from 'ws';
 import yaml from 'js-yaml';
 import { stackEnv, addUser, startStack, stopStack, REPO_ROOT } from '../e2e/lib/stack.js';
-import { HttpSession, RosLink, Lease, CameraViewer, ManualSession, ProcessSession, CellSchedule, ProcWatch, LogWatch } from './soak_cell.mjs';
+import { HttpSession, RosLink, Lease, CameraViewer, ManualSession, ProcessSession, CellSchedule, ProcWatch, LogWatch, simFeeder } from './soak_cell.mjs';
 
 const args = process.argv.slice(2);
 const opt = (name, dflt) => { const i = args.indexOf(`--${name}`); return i >= 0 && i + 1 < args.length ? args[i + 1] : dflt; };
@@ -379,7 +378,7 @@ async function main() {
   const processS = new ProcessSession(procS.link, cell, note, getCellWin);
   processS.open();
   const jogLease = new Lease(jogS.http, 'jog session', note, getCellWin);
-  const schedule = new CellSchedule({ manual, process: processS, jogLease, processLease: new Lease(procS.http, 'process session', note, getCellWin), cell, note, win: getCellWin });
+  const schedule = new CellSchedule({ manual, process: processS, jogLease, processLease: new Lease(procS.http, 'process session', note, getCellWin), cell, note, win: getCellWin, feeder: simFeeder(PORT + 2) });
   console.log(`waiting for the robot driver and the process server ...`);
   await schedule.ready(90_000, () => interrupted);
   await sleep(2000); // advertisements and subscriptions settle (rospy connects publishers to subscribers)

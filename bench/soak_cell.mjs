@@ -460,7 +460,7 @@ export class ProcessSession {
  * process picks them; then the process again. See soak_bench.mjs's header for why.
  */
 export class CellSchedule {
-  /** @param {{manual: ManualSession, process: ProcessSession, jogLease: Lease, processLease: Lease, cell: any, note: (s: string) => void, win: () => any, jogPairs?: number}} o */
+  /** @param {{manual: ManualSession, process: ProcessSession, jogLease: Lease, processLease: Lease, cell: any, note: (s: string) => void, win: () => any, feeder: () => Promise<{ok: boolean, message: string}>, jogPairs?: number}} o */
   constructor(o) {
     Object.assign(this, o);
     this.jogPairs = o.jogPairs ?? 2;
@@ -469,12 +469,11 @@ export class CellSchedule {
     this.inFixture = new Set();
     this.process.onCycle = (e) => this.inFixture.add(e);
     this.errorsInARow = 0;
+    /** a run failed since the last restock */
+    this.afterError = false;
     this.gaveUp = false;
     this.pairN = 0;
     this.phase = 'idle';
-    const poses = o.cell.process.poses;
-    this.parts = poses.part;
-    this.pockets = poses.pocket;
     const ah = (o.cell.parameters?.items || []).find((i) => i.id === 'approach_height');
     this.approach = (ah?.default ?? 100) / 1000;
   }
@@ -536,6 +535,7 @@ export class CellSchedule {
 
   #error() {
     this.win().processErrors++;
+    this.afterError = true;
     if (++this.errorsInARow >= 3 && !this.gaveUp) { this.gaveUp = true; this.note('process: 3 failed runs in a row: no more Starts (the jogging goes on)'); }
   }
 
@@ -546,7 +546,8 @@ export class CellSchedule {
       await this.clear();
       await this.jogWindow(this.jogPairs);
       if (this.stopping) return;
-      if (this.inFixture.size && ((this.process.state?.cycle ?? 1) - 1) % this.process.cycleTableLength() === 0) await this.restock();
+      const full = this.inFixture.size && ((this.process.state?.cycle ?? 1) - 1) % this.process.cycleTableLength() === 0;
+      if (full || this.afterError) await this.restock(); // after a failed run a part may lie anywhere
     } finally {
       await this.jogLease.release();
     }
@@ -579,49 +580,20 @@ export class CellSchedule {
   }
 
   /**
-   * The fixture is full: put the parts back where the process picks them, with the Manual page's moves and gripper
-   * buttons (a real cell has the parts restocked; the sim has no feeder). Grasp in the pocket 14 mm above the
-   * resting part's centre (the fingertips clear the pocket walls), set it down 4 mm above the table at the
-   * taught pick pose (the same turn), then home.
+   * The fixture is full: the feeder puts the parts back where the process picks them (the sim's /sim/restock, as
+   * a feeder or an operator refilling a real cell would; earlier soaks did it with the arm, whose set-down was only
+   * as exact as a teach-by-numbers grasp, and a part set down a few millimetres off ended in a force alarm later).
    */
   async restock() {
     this.phase = 'restock';
-    const up = this.approach;
-    let ok = true;
-    for (const e of [...this.inFixture].sort()) {
-      if (this.stopping) return;
-      const pk = this.pockets[e];
-      const pt = this.parts[e];
-      const grasp = [pk[0], pk[1], 0.026 + 0.014, pk[3], pk[4], pk[5]];
-      const place = [pt[0], pt[1], pt[2] + 0.004, pt[3], pt[4], pt[5]];
-      const lift = (p) => [p[0], p[1], p[2] + up, p[3], p[4], p[5]];
-      const steps = [
-        () => this.manual.tool('open'),
-        () => this.manual.movePose(lift(grasp), 0.25, `restock ${e + 1}: above pocket`),
-        () => this.manual.movePose(grasp, 0.1, `restock ${e + 1}: down to the part in the pocket`),
-        () => this.manual.tool('close'),
-        () => this.manual.tool('check_part'),
-        () => this.manual.movePose(lift(grasp), 0.1, `restock ${e + 1}: lift`),
-        () => this.manual.movePose(lift(place), 0.25, `restock ${e + 1}: above the pick place`),
-        () => this.manual.movePose(place, 0.1, `restock ${e + 1}: down to the table`),
-        () => this.manual.tool('open'),
-        () => this.manual.movePose(lift(place), 0.1, `restock ${e + 1}: retract`),
-      ];
-      let done = true;
-      for (const s of steps) {
-        if (this.stopping) return;
-        if (!(await s())) { done = false; break; }
-      }
-      if (done) { this.inFixture.delete(e); this.win().restocked++; } else {
-        ok = false;
-        this.win().restockErrors++;
-        this.inFixture.delete(e); // where it is now nobody knows: the process will tell
-        await this.manual.tool('open');
-        await this.manual.movePose(lift(this.manual.state?.tcp_pose ?? grasp), 0.1, 'restock: retract after a failure');
-      }
+    const r = await this.feeder();
+    if (r.ok) { this.win().restocked += this.inFixture.size; } else {
+      this.win().restockErrors++;
+      this.note(`restock: ${r.message}`);
     }
-    if (!this.stopping) await this.manual.moveHome();
-    return ok;
+    this.inFixture.clear();
+    this.afterError = false;
+    return r.ok;
   }
 
   /**
@@ -678,6 +650,24 @@ const memKb = (pid) => {
 const cpuTicks = (pid) => { try { const s = fs.readFileSync(`/proc/${pid}/stat`, 'utf8'); const f = s.slice(s.lastIndexOf(') ') + 2).split(' '); return Number(f[11]) + Number(f[12]); } catch { return NaN; } };
 
 /** Every process of one stack (pidsOfStack), grouped by name: RSS samples per minute, CPU, restarts. */
+/**
+ * The sim's feeder: /sim/restock over rosbridge itself, not through the BFF (it is the world's, not a user's).
+ * @param {number} rosbridgePort @returns {() => Promise<{ok: boolean, message: string}>}
+ */
+export function simFeeder(rosbridgePort) {
+  return () => new Promise((resolve) => {
+    const ws = new WebSocket(`ws://127.0.0.1:${rosbridgePort}`);
+    const done = (/** @type {{ok: boolean, message: string}} */ r) => { clearTimeout(timer); ws.close(); resolve(r); };
+    const timer = setTimeout(() => done({ ok: false, message: '/sim/restock did not answer within 10 s' }), 10_000);
+    ws.once('open', () => ws.send(JSON.stringify({ op: 'call_service', id: 'restock', service: '/sim/restock' })));
+    ws.on('message', (d) => {
+      const m = JSON.parse(d.toString());
+      if (m.op === 'service_response' && m.id === 'restock') done({ ok: m.result === true && m.values?.success === true, message: String(m.values?.message ?? m.values) });
+    });
+    ws.once('error', (e) => done({ ok: false, message: `rosbridge: ${e.message}` }));
+  });
+}
+
 export class ProcWatch {
   /** @param {string} dataDir @param {(s: string) => void} note */
   constructor(dataDir, note) {

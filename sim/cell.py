@@ -20,7 +20,7 @@ from .rtde_server import RTDEServer
 from .safety import FaultBook, cell_faults
 from .script_server import ScriptServer
 from .tcp import TcpServer
-from .world import World
+from .world import World, restock_text
 
 log = logging.getLogger("sim.cell")
 
@@ -65,6 +65,11 @@ class Cell:
         self.loop = WorldLoop(self.world, list(self.controllers.values()), self.lock)
         self.cameras = None
         self.ros = None
+
+    def restock(self) -> tuple[bool, str]:
+        """/sim/restock: the parts back where they lay at the start (sim/world.py World.restock)."""
+        with self.lock:
+            return True, restock_text(*self.world.restock())
 
     def trigger_fault(self, fault: str) -> tuple[bool, str]:
         """/sim/trigger_fault: `<group>.<fault>` for one arm; a plain fault name for every arm that has it (the door

@@ -6,8 +6,9 @@ rate), one sensor_msgs/CompressedImage camera per video stream (camera rate, onl
 Fixed names: /sim/faults (latched cell_msgs/AlarmList: the devices' fault state, for the cell's alarms feature to
 turn into alarms; the sim publishes no alarm list itself), /sim/objects (geometry_msgs/PoseArray, every part in
 creation order at OBJECTS_RATE, frame `base` when the only arm stands at the world origin, else `world`: ground truth
-for tests and the UI to see parts move; a real cell has no such topic) and the service /sim/trigger_fault
-(cell_msgs/TriggerFault).
+for tests and the UI to see parts move; a real cell has no such topic), the service /sim/trigger_fault
+(cell_msgs/TriggerFault) and /sim/restock (std_srvs/Trigger: every part no robot holds or touches back where it lay
+at the start, as a feeder or an operator refilling the cell would; for long runs of the process).
 The 3D view (the cell file's `scene:` section, sim/cell_file.py parse_scene): on `scene.markers` a
 visualization_msgs/MarkerArray of the parts and stations (sim/markers.py, frame `world`) with every /sim/objects
 message; at start, for each simulated UR arm whose `scene.arms[]` entry names a `robot_description`, that parameter
@@ -114,6 +115,8 @@ class RosBridge:
         self._types = dict(AlarmList=AlarmList, Scatter=Scatter, WrenchStamped=WrenchStamped,
                            CompressedImage=CompressedImage, Pose=Pose, PoseArray=PoseArray)
         self.service = rospy.Service("/sim/trigger_fault", TriggerFault, self._trigger_fault)
+        from std_srvs.srv import Trigger
+        self.restock_service = rospy.Service("/sim/restock", Trigger, self._restock)
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
         self._objects_thread: Optional[threading.Thread] = None
@@ -132,6 +135,7 @@ class RosBridge:
             if t is not None:
                 t.join(1.0)
         self.service.shutdown("sim stopping")
+        self.restock_service.shutdown("sim stopping")
         self.rospy.signal_shutdown("sim stopping")
 
     # ---- publishers ---------------------------------------------------------------------------
@@ -219,6 +223,12 @@ class RosBridge:
             m.since = self.rospy.Time.from_sec(f.since)
             out.alarms.append(m)
         self.pub_faults.publish(out)
+
+    def _restock(self, _req):
+        from std_srvs.srv import TriggerResponse
+        ok, message = self.cell.restock()
+        log.info("restock: %s", message)
+        return TriggerResponse(success=ok, message=message)
 
     def _trigger_fault(self, req):
         from cell_msgs.srv import TriggerFaultResponse

@@ -42,6 +42,13 @@ VACUUM_TILT = math.radians(15)
 VACUUM_FORCE = 40.0       # N the suction holds with (a held 0.1 kg cube needs 1 N; a collision tears it off less)
 
 
+def restock_text(moved: int, kept: int) -> str:
+    """What /sim/restock answers."""
+    one = kept == 1
+    held = f"; {kept} left where {'it is' if one else 'they are'}: a robot holds or touches {'it' if one else 'them'}"
+    return f"{moved} part{'' if moved == 1 else 's'} put back" + (held if kept else "")
+
+
 @dataclass
 class ArmState:
     q: np.ndarray
@@ -318,6 +325,7 @@ class World:
         self.fixture = self.stations[fixtures[0]] if fixtures else None
         self.fixture_slots = self.pockets[fixtures[0]] if fixtures else []
         self.cubes = self._build_parts(self.spec.parts)
+        self.part_homes = [self.p.getBasePositionAndOrientation(c) for c in self.cubes]
         for arm in self.arms:
             arm.start()
 
@@ -412,6 +420,20 @@ class World:
             if a.held == part:
                 return a
         return None
+
+    def restock(self) -> tuple[int, int]:
+        """What a feeder (or an operator refilling the cell) does: every part no robot touches goes back where it lay
+        at the start. Returns (parts put back, parts left where they are because a robot holds or touches them)."""
+        moved = kept = 0
+        for cube, (pos, orn) in zip(self.cubes, self.part_homes):
+            if self.holder_of(cube) is not None or any(self.p.getContactPoints(bodyA=cube, bodyB=a.robot)
+                                                       for a in self.arms):
+                kept += 1
+                continue
+            self.p.resetBasePositionAndOrientation(cube, pos, orn)
+            self.p.resetBaseVelocity(cube, (0, 0, 0), (0, 0, 0))
+            moved += 1
+        return moved, kept
 
     def body_poses(self) -> list[tuple[tuple, tuple]]:
         """The parts' poses in the world frame, in creation order."""

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..cell_file import CellDevices
 from ..safety import FaultBook
-from ..world import DT
+from ..world import DT, restock_text
 from .spec import RosControlArm, RosControlWorld
 from .trajectory import Defaults, GoalEvent, TrajectoryController
 from .world import IiwaArm, IiwaWorld
@@ -126,6 +126,11 @@ class RosControlCell:
             self._stop.wait(max(0.0, (self.sim_time - start_sim) / self.opts.speed - (time.perf_counter() - start_wall)))
 
     # ---- faults -----------------------------------------------------------------------------------------
+    def restock(self) -> tuple[bool, str]:
+        """/sim/restock: the parts back where they lay at the start (sim/world.py World.restock)."""
+        with self.lock:
+            return True, restock_text(*self.world.restock())
+
     def trigger_fault(self, fault: str) -> tuple[bool, str]:
         """/sim/trigger_fault: collision, vacuum_fault (every arm; `<group>.<fault>` for one), reset (every arm)."""
         group, dot, name = fault.rpartition(".")

@@ -19,6 +19,7 @@ import rospy
 import rtde_receive
 from cell_msgs.msg import AlarmList, Scatter
 from cell_msgs.srv import TriggerFault
+from std_srvs.srv import Trigger
 from geometry_msgs.msg import PoseArray, WrenchStamped
 from PIL import Image
 from sensor_msgs.msg import CompressedImage
@@ -198,6 +199,10 @@ def test_object_poses_on_sim_objects(ros_cell):
         q = (pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
         assert abs(abs(sum(a * b for a, b in zip(q, orn))) - 1) < 1e-3  # same orientation (q or -q)
     objects.sub.unregister()
+    # The feeder: nothing moved yet, so every part is "put back" where it lies (sim/tests/test_restock.py moves them).
+    rospy.wait_for_service("/sim/restock", 5)
+    answer = rospy.ServiceProxy("/sim/restock", Trigger)()
+    assert answer.success and answer.message == "3 parts put back", answer
 
 
 def test_scene_markers_and_the_arms_robot_description(ros_cell):
