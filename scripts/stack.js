@@ -28,6 +28,7 @@ import { masterOnline } from '../bff/src/core/ros/health.js';
 import { resolveHosts, armsOf } from '../bff/src/core/config/hosts.js';
 import { RestartPolicy, restartDelay, seconds } from './supervise/restart-policy.js';
 import { Liveness, graceFromEnv } from './supervise/liveness.js';
+import { fdOutput } from './supervise/output.js';
 
 const env = readEnv();
 const urHost = process.env.UR_HOST || '127.0.0.1'; // the UR controller, or where the simulated one listens
@@ -35,7 +36,10 @@ const STACK_ID = crypto.randomUUID();
 const rosHome = path.join(env.dataDir, 'ros');
 fs.mkdirSync(rosHome, { recursive: true });
 const masterPort = Number(new URL(env.rosMasterUri).port || 11311);
-const log = (m) => console.log(`[stack] ${m}`);
+// Never process.stdout / console: a stalled reader of a pipe would block the supervisor (supervise/output.js).
+const out = fdOutput(1, { onError: () => shutdown(1) });
+const err = fdOutput(2, { onError: () => { /* stderr gone: stdout still says what happens */ } });
+const log = (m) => out.line(`[stack] ${m}`);
 
 const childEnv = {
   ...process.env,
@@ -89,8 +93,16 @@ function startWatchdog() {
   const groups = [...children.values()].filter((c) => c.proc?.pid && !exited(c.proc)).map((c) => String(c.proc?.pid));
   // --jitless: it idles for hours on a 250 ms timer; after ~5 minutes V8 would compile Node's timer code with
   // Turbofan, paging in the compiler and growing its RSS by 13 % (43 -> 49 MiB, seen in the soak), for no gain.
+  // Its stderr is ours, but never by inheriting our descriptor: a child's start-up puts its stdio back in blocking
+  // mode, and on a shared pipe that is ours too (our writes would block again: supervise/output.js). A pipe or file
+  // reopened through /proc is a descriptor of its own; a socket cannot be: then its lines are relayed (and its last
+  // ones lost if we die).
+  let wdErr;
+  try { wdErr = fs.openSync('/proc/self/fd/2', fs.constants.O_WRONLY | fs.constants.O_APPEND); } catch { wdErr = 'pipe'; }
   const wd = spawn(process.execPath, ['--jitless', WATCHDOG, STACK_ID, String(process.pid), ...groups],
-    { detached: true, stdio: ['pipe', 'ignore', 'inherit'] });
+    { detached: true, stdio: ['pipe', 'ignore', wdErr] });
+  if (typeof wdErr === 'number') fs.closeSync(wdErr);
+  else if (wd.stderr) relay('watchdog', wd.stderr, err);
   wd.stdin.on('error', () => { /* it died: see 'exit' */ });
   wd.on('error', (e) => log(`watchdog: ${e.message}`));
   wd.on('exit', (code, sig) => {
@@ -139,13 +151,8 @@ function spawnChild(c) {
   const proc = spawn(c.cmd, c.args, {
     cwd: REPO_ROOT, env: { ...childEnv, CELL_STACK_CHILD: name }, detached: true, stdio: ['ignore', 'pipe', 'pipe'],
   });
-  const prefix = (stream, out) => stream.on('data', (d) => {
-    for (const line of d.toString().split('\n')) {
-      if (line.trim()) out.write(line.startsWith(`[${name}]`) ? `${line}\n` : `[${name}] ${line}\n`);
-    }
-  });
-  prefix(proc.stdout, process.stdout);
-  prefix(proc.stderr, process.stderr);
+  relay(name, proc.stdout, out);
+  relay(name, proc.stderr, err);
   proc.on('error', (e) => {
     log(`${name}: ${e.message}`);
     if (!proc.pid) onExit(c, proc, null, 'spawn failed'); // no 'exit' comes for a process that never ran
@@ -155,6 +162,23 @@ function spawnChild(c) {
   c.held = false;
   c.policy.started();
   tellWatchdog('group', proc.pid);
+}
+
+/**
+ * A child's output, line by line, each line prefixed with its name (unless it names itself already).
+ * @param {string} name @param {import('node:stream').Readable | null} stream @param {import('./supervise/output.js').LineOutput} to
+ */
+function relay(name, stream, to) {
+  if (!stream) return;
+  let rest = ''; // a line split across chunks is relayed whole
+  const put = (/** @type {string} */ line) => { if (line.trim()) to.line(line.startsWith(`[${name}]`) ? line : `[${name}] ${line}`); };
+  stream.on('data', (d) => {
+    const lines = (rest + d.toString()).split('\n');
+    rest = lines.pop() ?? '';
+    if (rest.length > 65536) { lines.push(rest); rest = ''; }
+    lines.forEach(put);
+  });
+  stream.on('end', () => put(rest));
 }
 
 /**
@@ -342,6 +366,7 @@ async function shutdown(code = 0) {
   await waitUntil(() => markedPids().every((p) => !alive(p)), 700);
   await stopWatchdog(Math.max(400, t0 + 4800 - Date.now()));
   log('stopped');
+  await Promise.all([out.flush(150), err.flush(150)]); // a reader that does not read loses the last lines, not the exit
   process.exit(code);
 }
 
@@ -354,8 +379,7 @@ process.on('SIGINT', () => shutdown(0));
 process.on('SIGTERM', () => shutdown(0));
 process.on('SIGHUP', () => shutdown(0));
 // Whatever goes wrong in the supervisor itself, the children must not outlive it.
-process.on('uncaughtException', (e) => { console.error(`[stack] ${e.stack || e}`); shutdown(1); });
-process.stdout.on('error', () => shutdown(1));
+process.on('uncaughtException', (e) => { err.line(`[stack] ${e.stack || e}`); shutdown(1); });
 const parent = process.ppid;
 setInterval(() => { if (process.ppid !== parent) shutdown(1); }, 500).unref();
 
@@ -367,13 +391,13 @@ async function main() {
   let livenessGraceMs;
   try {
     livenessGraceMs = graceFromEnv(process.env);
-  } catch (e) { console.error(/** @type {Error} */ (e).message); process.exit(2); }
+  } catch (e) { await exitWith(2, /** @type {Error} */ (e).message); }
   try {
     cell = loadCell(env.cellConfig, FEATURES);
     arms = armsOf(resolveHosts(cell.manual, process.env));
   } catch (e) {
-    if (e instanceof CellConfigError) { console.error(e.message); process.exit(2); }
-    if (e instanceof Error && /^(UR_HOSTS?|manual\.groups)/.test(e.message)) { console.error(`${env.cellConfig}: ${e.message}`); process.exit(2); }
+    if (e instanceof CellConfigError) await exitWith(2, e.message);
+    if (e instanceof Error && /^(UR_HOSTS?|manual\.groups)/.test(e.message)) await exitWith(2, `${env.cellConfig}: ${e.message}`);
     throw e;
   }
   // One UR controller per arm (each at its own address); a cell without motion groups has the one at UR_HOST.
@@ -464,6 +488,13 @@ function shellQuote(s) {
   return `'${String(s).replace(/'/g, `'\\''`)}'`;
 }
 
+/** Before any child runs: say why on stderr and exit. @param {number} code @param {string} message */
+async function exitWith(code, message) {
+  err.line(message);
+  await err.flush(2000);
+  process.exit(code);
+}
+
 main().catch((e) => {
-  if (!stopping) { console.error(`[stack] ${e.message}`); shutdown(1); }
+  if (!stopping) { err.line(`[stack] ${e.message}`); shutdown(1); }
 });

@@ -13,6 +13,7 @@
 // stdin, one per line: `group <pgid>` (a child group started, restarts included), `forget <pgid>` (a dead
 // child's group is empty: the supervisor restarted that child under a new group), `done` (clean shutdown finished).
 import fs from 'node:fs';
+import { fdOutput } from './supervise/output.js';
 
 const GRACE_MS = 2000; // SIGTERM, then SIGKILL: everything is gone well within 5 s of the supervisor's death
 const QUIET_MS = 250; // nothing left for this long (a child forked by the dying supervisor has exec'd by then)
@@ -30,9 +31,12 @@ const validPid = (n) => Number.isInteger(n) && n > 1;
 /** Process groups of the supervisor's children (each child leads its own group). */
 const groups = new Set(groupArgs.map(Number).filter(validPid));
 
-// Our stderr is the supervisor's: a closed terminal or pipe must not stop us from cleaning up.
-process.stderr.on('error', () => {});
-const log = (m) => { try { process.stderr.write(`[watchdog] ${m}\n`); } catch { /* nowhere to write */ } };
+// Our stderr is the supervisor's: a closed, full or unread pipe must not stop us from cleaning up
+// (process.stderr would block on a full pipe: supervise/output.js).
+const err = fdOutput(2);
+const log = (m) => err.line(`[watchdog] ${m}`);
+/** @param {number} code */
+const exit = async (code) => { await err.flush(200); process.exit(code); };
 
 let clean = false;
 let triggered = false;
@@ -99,7 +103,7 @@ async function trigger(reason) {
   if (triggered) return;
   triggered = true;
   clearInterval(poll);
-  if (clean && targets().pids.length === 0) process.exit(0);
+  if (clean && targets().pids.length === 0) return exit(0);
   log(clean ? 'processes of the stack survived its shutdown: stopping them'
     : `supervisor ${supervisor} died (${reason}): stopping its stack`);
   const t0 = Date.now();
@@ -125,11 +129,11 @@ async function trigger(reason) {
       }
       if (now - t0 > GIVE_UP_MS) {
         log(`giving up; still running: ${left.pids.map(describe).join('; ')}`);
-        process.exit(1);
+        return exit(1);
       }
     }
     await new Promise((r) => setTimeout(r, POLL_MS));
   }
   log(`stopped ${termed.size} processes in ${((Date.now() - t0 - QUIET_MS) / 1000).toFixed(1)} s`);
-  process.exit(0);
+  return exit(0);
 }

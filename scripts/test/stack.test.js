@@ -3,7 +3,7 @@
 // (up, or still starting its children) leaves nothing behind: its watchdog stops the stack within 5 s.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { spawn } from 'node:child_process';
+import { spawn, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import net from 'node:net';
 import https from 'node:https';
@@ -188,4 +188,54 @@ test('SIGKILL of the supervisor while it is still starting its children leaves n
   assert.match(marker ?? '', /^CELL_STACK_ID=\S+$/);
   const took = await killSupervisorAndAwaitCleanup(proc, env, marker, ports);
   t.diagnostic(`cleaned up in ${took} s; ${output.match(/^\[watchdog\].*/gm)?.join(' / ')}`);
+});
+
+test('output nobody reads: the stack still starts, restarts a child and stops within 5 s; queued lines arrive once read', { timeout: 240_000 }, async (t) => {
+  const base = 28980;
+  const ports = [base, base + 1, base + 2, base + 3];
+  const env = stackEnv({ port: base, masterPort: base + 1, rosbridgePort: base + 2, extraEnv: { UR_SIM: '0' } });
+  let marker = null;
+  t.after(() => killLeftovers(env, marker));
+  // A pipe that is full before the stack starts, and that nobody reads: what a stuck log collector looks like.
+  // The stack writes to it through its own blocking descriptor; the test reads and fills it through another.
+  const fifo = `${env.DATA_DIR}/output.fifo`;
+  spawnSync('mkfifo', [fifo]);
+  const mine = fs.openSync(fifo, fs.constants.O_RDWR | fs.constants.O_NONBLOCK);
+  const theirs = fs.openSync(fifo, fs.constants.O_WRONLY);
+  t.after(() => { fs.closeSync(mine); });
+  const fill = () => { let n = 0; try { for (;;) n += fs.writeSync(mine, Buffer.alloc(4096, '.')); } catch (e) { if (e.code !== 'EAGAIN') throw e; } return n; };
+  assert.ok(fill() >= 4096, 'the pipe is full');
+  const proc = spawn(process.execPath, ['scripts/stack.js'], { cwd: REPO_ROOT, env, stdio: ['ignore', theirs, theirs] });
+  fs.closeSync(theirs);
+  t.after(() => stopStack(proc));
+  const health = async () => { try { return await (await fetch(`http://127.0.0.1:${base}/api/health`, { signal: AbortSignal.timeout(2000) })).json(); } catch { return null; } };
+
+  // Up, with its output stalled from the first line on (the supervisor used to block on that line for ever).
+  assert.ok(await until(async () => (await health())?.ros?.rosbridge === true, 90_000), 'the stack comes up and rosbridge answers');
+  marker = markerOf(env.DATA_DIR);
+  // Still supervising: a killed BFF is restarted (its exit and restart are logged into the stalled pipe).
+  const bffPid = () => pidsOfStack(env.DATA_DIR).find((p) => /bff\/src\/server\.js/.test(fs.readFileSync(`/proc/${p}/cmdline`, 'utf8')));
+  const first = bffPid();
+  assert.ok(first, 'the BFF runs');
+  process.kill(first, 'SIGKILL');
+  assert.ok(await until(async () => { const p = bffPid(); return !!p && p !== first && (await health())?.ros?.rosbridge === true; }, 60_000),
+    'the BFF is restarted and answers');
+
+  // Once read, the queued lines come through, in order, up to the restart.
+  let text = '';
+  const drain = () => { const buf = Buffer.alloc(65536); try { for (;;) { const n = fs.readSync(mine, buf); if (!n) break; text += buf.subarray(0, n).toString(); } } catch (e) { if (e.code !== 'EAGAIN') throw e; } };
+  assert.ok(await until(() => { drain(); return /\[stack\] starting bff again/.test(text); }, 20_000), `the queued lines arrive:\n${text.replace(/^\.+/, '').slice(-1500)}`);
+  const lines = text.replace(/^\.+/, '').split('\n');
+  const at = (re) => lines.findIndex((l) => re.test(l));
+  const order = [/^\[stack\] starting roscore/, /^\[bff\] listening on http:/, /^\[stack\] bff exited \(SIGKILL\)/, /^\[stack\] starting bff again/];
+  const seen = order.map(at);
+  assert.ok(seen.every((i, k) => i >= 0 && (k === 0 || i > seen[k - 1])), `in order: ${order.map((re, k) => `${re.source} at ${seen[k]}`).join(', ')}`);
+
+  // Stalled again: Ctrl-C still stops everything within 5 s.
+  fill();
+  const took = await (async () => { const t0 = Date.now(); await stopStack(proc, 10_000); return (Date.now() - t0) / 1000; })();
+  assert.ok(proc.exitCode === 0, `the supervisor exited (${proc.exitCode ?? proc.signalCode})`);
+  assert.ok(took < 5, `stopped in ${took} s with its output stalled`);
+  assert.ok(await until(() => pidsOfStack(env.DATA_DIR).length === 0, 1000), 'nothing of the stack is left');
+  for (const p of ports) assert.ok(await portFree(p), `port ${p} is free again`);
 });
