@@ -60,6 +60,9 @@ function readFrom(file, from) {
 }
 
 /** @implements {import('@playwright/test/reporter').Reporter} */
+/** An expect error on one line, with what was expected and received (colour codes removed). @param {string | undefined} m */
+const errorText = (m) => (m ?? '').replace(/\x1b\[[0-9;]*m/g, '').split('\n').map((l) => l.trim()).filter(Boolean).slice(0, 4).join(' | ');
+
 export default class FailureContextReporter {
   /** Failed tests whose error context was not written yet when their end was reported. @type {{title: string, file: string}[]} */
   pending = [];
@@ -108,7 +111,7 @@ export default class FailureContextReporter {
     const title = test.titlePath().filter(Boolean).join(' › ');
     const lines = [`\n--- ${result.status} (attempt ${result.retry + 1}): ${title}`];
     for (const step of result.steps) {
-      if (step.error || step.duration < 0) lines.push(`step: ${step.title}${step.error ? ` (error: ${step.error.message?.split('\n')[0]})` : ''}`);
+      if (step.error || step.duration < 0) lines.push(`step: ${step.title}${step.error ? ` (error: ${errorText(step.error.message)})` : ''}`);
     }
     lines.push(`last steps: ${result.steps.slice(-4).map((s) => `${s.title} (${s.duration} ms)`).join('; ')}`);
     const file = contextFile(result);

@@ -24,7 +24,7 @@ export async function openManual(page, who = 'admin') {
 export async function expectStandstill(robot, timeout = 3_000) {
   await expect.poll(() => robot.speed(), { timeout, intervals: [20] }).toBeLessThan(1e-3);
   const after = await robot.observe(STILL.messages);
-  expect(after.travel).toBeLessThan(STILL.rad);
+  expect(after.travel, `travel over the ${STILL.messages} joint states after the arm stood still (their largest speed: ${after.maxSpeed} rad/s)`).toBeLessThan(STILL.rad);
 }
 
 /**
