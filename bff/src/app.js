@@ -14,7 +14,7 @@ import { LeaseFile } from './core/control/lease-file.js';
 import { AwakeClock } from './core/control/awake-clock.js';
 import { controlRoutes } from './core/control/routes.js';
 import { configFor } from './core/access/pages.js';
-import { grantsFor, motionNames, argumentChecks } from './core/access/grants.js';
+import { grantsFor, motionNames, argumentChecks, stampedTopics } from './core/access/grants.js';
 import { RosHealth } from './core/ros/health.js';
 import { RosRelay } from './core/ros/relay.js';
 import { createOpGuard } from './core/ros/op-guard.js';
@@ -73,7 +73,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     authenticate,
     checkOrigin: sameOrigin,
     guard: createOpGuard({
-      grantsOf: (role) => grants.get(role), motion: motionNames(cell, features), lease, audit, checkArgs: argumentChecks(cell, features),
+      grantsOf: (role) => grants.get(role), motion: motionNames(cell, features), stamped: stampedTopics(cell, features), lease, audit, checkArgs: argumentChecks(cell, features),
     }),
     isValid: (s) => tokens.sessionAlive(s.claims) && users.get(s.username)?.role === s.role,
     // A lease holder that disconnects gives control back.

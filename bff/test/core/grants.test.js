@@ -4,7 +4,8 @@ import assert from 'node:assert/strict';
 import path from 'node:path';
 import { loadCell } from '../../src/core/config/cell.js';
 import { REPO_ROOT } from '../../src/core/config/env.js';
-import { grantsFor, motionNames, stopNames, mayMoveRobot, argumentChecks } from '../../src/core/access/grants.js';
+import { grantsFor, motionNames, stopNames, mayMoveRobot, argumentChecks, stampedTopics } from '../../src/core/access/grants.js';
+import { decode as cborDecode, encode as cborEncode } from 'cbor-x';
 import { configFor } from '../../src/core/access/pages.js';
 import { matchesAny } from '../../src/core/access/rules.js';
 import { namesOf, KINDS, isEmpty } from '../../src/core/features/feature.js';
@@ -25,11 +26,29 @@ function guardFor(roles) {
   const grants = new Map(Object.keys(roles).map((r) => [r, grantsFor(c, FEATURES, r)]));
   const lease = new ControlLease();
   const audit = { entries: [], record(e) { this.entries.push(e); } };
-  const guard = createOpGuard({ grantsOf: (r) => grants.get(r), motion: motionNames(c, FEATURES), lease, audit, checkArgs: argumentChecks(c, FEATURES) });
+  const guard = createOpGuard({ grantsOf: (r) => grants.get(r), motion: motionNames(c, FEATURES), stamped: stampedTopics(c, FEATURES), lease, audit, checkArgs: argumentChecks(c, FEATURES) });
   const ctx = (role, sid) => ({ session: { username: role, role, sid }, ip: '127.0.0.1', rosapiCalls: new Map(), lastPublishAudit: new Map() });
   const send = (cx, m) => guard.inspect(cx, Buffer.from(JSON.stringify(m)), false);
-  return { lease, ctx, send };
+  return { lease, ctx, send, guard };
 }
+
+test('a jog heartbeat is stamped with the moment the BFF lets it through (JSON and CBOR); a client\'s own stamp is replaced', () => {
+  assert.deepEqual(stampedTopics(cell, FEATURES), ['/cell/manual/jog']);
+  const { lease, ctx, send, guard } = guardFor({ admin: { pages: ['manual'], commands: ['manual'] } });
+  const admin = ctx('admin', 'a');
+  assert.ok(lease.take(admin.session).ok);
+  const jog = { op: 'publish', id: 'j', topic: '/cell/manual/jog', msg: { group: 'arm', mode: 'joint', axis: 0, direction: 1, speed: 0.5, frame: 'base', stamp: { secs: 4e9, nsecs: 0 } } };
+  const t0 = Date.now();
+  const json = send(admin, jog);
+  const cbor = guard.inspect(admin, Buffer.from(cborEncode(jog)), true);
+  const t1 = Date.now();
+  for (const [v, sent] of [[json, JSON.parse(json.data.toString())], [cbor, cborDecode(cbor.data)]]) {
+    assert.equal(v.forward, true);
+    const ms = sent.msg.stamp.secs * 1000 + sent.msg.stamp.nsecs / 1e6;
+    assert.ok(ms >= t0 && ms <= t1, `stamp ${ms} within ${t0}..${t1}`);
+    assert.deepEqual({ ...sent.msg, stamp: undefined }, { ...jog.msg, stamp: undefined }, 'the rest unchanged');
+  }
+});
 
 const motionRows = FEATURES.flatMap((f) => ['publish', 'call_service'].flatMap((kind) => (namesOf(f, 'motion', cell)[kind] || []).map((name) => ({ f, kind, name }))));
 

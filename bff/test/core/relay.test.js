@@ -147,7 +147,11 @@ test('motion ops pass only for the session holding the control lease', async () 
   assert.equal(take.status, 200);
   const jog2 = { ...jog, id: 'j2' };
   ws.send(JSON.stringify(jog2));
-  await until(() => upstreamFrames.includes(JSON.stringify(jog2)));
+  const j2 = (/** @type {string} */ f) => f.startsWith('{') && JSON.parse(f).id === 'j2'; // (CBOR frames of other tests too)
+  await until(() => upstreamFrames.some(j2));
+  const passed = JSON.parse(upstreamFrames.find(j2));
+  assert.deepEqual({ ...passed, msg: { ...passed.msg, stamp: undefined } }, { ...jog2, msg: { ...jog2.msg, stamp: undefined } });
+  assert.ok(Math.abs(passed.msg.stamp.secs - Date.now() / 1000) < 5, 'stamped as it passed (the driver drops late heartbeats)');
 
   // Another admin session sees the holder named, until it takes over.
   const other = await login(t.base, 'admin', t.passwords.admin);

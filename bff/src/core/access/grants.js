@@ -33,6 +33,11 @@ export function cellRobotStop(/** @type {Cell} */ cell, /** @type {Feature[]} */
   return f?.robotStop ?? null;
 }
 
+/** Topics whose publishes the BFF stamps as it lets them through (features' `stamped`, for the cell's sections). */
+export function stampedTopics(/** @type {Cell} */ cell, /** @type {Feature[]} */ features) {
+  return features.filter((f) => f.stamped && (!f.schema || cell[f.id] !== undefined)).flatMap((f) => f.stamped ?? []);
+}
+
 /** @param {Cell} cell @param {Feature[]} features */
 export function stopNames(cell, features) {
   return mergeNames(...features.map((f) => namesOf(f, 'stop', cell)));

@@ -43,6 +43,8 @@ import { REPO_ROOT } from '../config/env.js';
  *   the commands that move the robot: they also need the control lease
  * @property {(section: any, cell: import('../config/cell-types.js').Cell) => RosNames} [stop]
  *   what stops the robot: granted to every role that sees a page that can move it, never lease-gated
+ * @property {string[]} [stamped] hold-to-run heartbeat topics: their messages have a `stamp` (time) field, which
+ *   the BFF sets to the moment it lets each one through, so the driver can drop heartbeats that arrive late
  * @property {{service: string, type: string}} [robotStop] the service behind the app's "Stop robot" button:
  *   granted to every role that sees any page (moving the robot or not), never lease-gated
  * @property {(section: any, role: string, op: string, target: string, msg: any) => string | null} [checkArgs]

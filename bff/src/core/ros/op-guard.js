@@ -16,13 +16,15 @@ let injected = 0;
 
 /**
  * @param {{grantsOf: (role: string) => import('../config/cell-types.js').RosGrants | undefined,
- *   motion: {publish: string[], call_service: string[]}, lease: import('../control/lease.js').ControlLease,
+ *   motion: {publish: string[], call_service: string[]}, stamped?: string[], lease: import('../control/lease.js').ControlLease,
  *   audit: import('../audit/audit-log.js').AuditLog,
  *   checkArgs?: (role: string, op: string, target: string, msg: any) => string | null}} deps
  *   grantsOf: the role's grants (core/access/grants.js); motion: names whose publish or call needs the lease;
- *   checkArgs: the features' refusals by argument (core/access/grants.js argumentChecks).
+ *   checkArgs: the features' refusals by argument (core/access/grants.js argumentChecks);
+ *   stamped: heartbeat topics whose messages get `stamp` = now as they pass (core/access/grants.js stampedTopics).
  */
-export function createOpGuard({ grantsOf, motion, lease, audit, checkArgs = () => null }) {
+export function createOpGuard({ grantsOf, motion, stamped = [], lease, audit, checkArgs = () => null }) {
+  const stampedSet = new Set(stamped);
 
   /** @param {ClientCtx} ctx @param {string} op @param {string|undefined} target @param {'ok'|'denied'} outcome @param {string} [detail] */
   const record = (ctx, op, target, outcome, detail) => audit.record({
@@ -82,6 +84,12 @@ export function createOpGuard({ grantsOf, motion, lease, audit, checkArgs = () =
       } else if (op === 'call_service' && !target.startsWith('/rosapi/')) record(ctx, op, target, 'ok');
       else if (op === 'advertise' || op === 'advertise_service') record(ctx, op, target, 'ok');
 
+      if (op === 'publish' && stampedSet.has(target) && msg.msg && typeof msg.msg === 'object' && !Array.isArray(msg.msg)) {
+        // When it was let through: the driver drops a heartbeat that arrives later than its jog timeout.
+        const now = Date.now();
+        const clean = { ...msg, msg: { ...msg.msg, stamp: { secs: Math.floor(now / 1000), nsecs: (now % 1000) * 1e6 } } };
+        return { forward: true, data: isBinary ? Buffer.from(cborEncode(clean)) : Buffer.from(JSON.stringify(clean)), replies: [], msg: clean };
+      }
       if (op === 'call_service' && isFilteredRosapi(target)) {
         // The answer must be matched to this call to be filtered: give it an id and keep it in one plain frame.
         const id = typeof msg.id === 'string' ? msg.id : `bff_rosapi_${++injected}`;

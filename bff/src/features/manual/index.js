@@ -29,5 +29,6 @@ export default defineFeature({
   commands: () => ({ publish: ['/cell/manual/jog'], call_service: MOVES }),
   motion: () => ({ publish: ['/cell/manual/jog'], call_service: MOVES }),
   stop: () => ({ call_service: ['/cell/manual/stop'] }),
+  stamped: ['/cell/manual/jog'],
   robotStop: { service: '/cell/manual/stop', type: 'std_srvs/Trigger' },
 });

@@ -583,6 +583,30 @@ def test_jog_heartbeat_timeout_stops_the_arm(robot: FakeRobot) -> None:
     assert not d.check_heartbeat()
 
 
+def test_a_late_heartbeat_neither_restarts_nor_keeps_a_jog_alive(robot: FakeRobot) -> None:
+    """CI: a session lost control during a jog; the watchdog stopped the arm, then its heartbeats, let through by the
+    BFF before the take-over and held up in a stalled rosbridge, arrived and moved the arm again (28 mrad)."""
+    clock = FakeClock()
+    d = make_driver(robot, clock=clock)
+    assert d.connect()
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01)
+    assert len(robot.moves("speedJ")) == 1
+    clock.t += 0.1
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.25)  # late: no heartbeat
+    assert d.state().message == "jog ignored: it arrived 0.25 s after it was sent (more than the jog timeout, 0.20 s)"
+    clock.t += 0.15
+    assert d.check_heartbeat(), "the late one did not keep the jog alive"
+    assert len(robot.moves("speedStop")) == 1
+    d.poll()
+    for age in (0.6, 0.55, 0.5):  # the backlog arrives: nothing moves
+        d.jog("arm", "joint", 0, 1, 0.5, "base", age)
+    assert len(robot.moves("speedJ")) == 1 and d.state().motion == "idle"
+    d.jog("arm", "joint", 0, 1, 0.5, "base", None)  # unknown age (published on ROS directly): as before
+    assert len(robot.moves("speedJ")) == 2
+    d.jog("arm", "joint", 0, 0, 0.5, "base", 5.0)  # a release stops however late it comes
+    assert len(robot.moves("speedStop")) == 2
+
+
 def test_jog_release_replace_and_caps(robot: FakeRobot) -> None:
     section = demo_section()
     section["max_tcp_speed"] = 0.9
@@ -1054,7 +1078,7 @@ class FakeArm:
         self.stopped_at = time.monotonic()
         return self.stop_answer
 
-    def jog(self, group, mode, axis, direction, speed, frame="base"): self.calls.append(("jog", group, direction))
+    def jog(self, group, mode, axis, direction, speed, frame="base", age_s=None): self.calls.append(("jog", group, direction))
     def refuse_jog(self, why): self.calls.append(("refuse_jog", why))
 
 

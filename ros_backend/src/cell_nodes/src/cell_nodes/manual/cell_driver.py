@@ -44,7 +44,8 @@ class ArmDriver(Protocol):
                      pose: Sequence[float] = ()) -> tuple[bool, str, list[str], list[float], list[float]]: ...
     def tool_action(self, tool: str, action: str) -> tuple[bool, str]: ...
     def stop(self, wait: bool = True) -> tuple[bool, str]: ...
-    def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base") -> None: ...
+    def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base",
+            age_s: Optional[float] = None) -> None: ...
     def refuse_jog(self, why: str) -> None: ...
 
 
@@ -184,12 +185,13 @@ class CellDriver:
         return False, "; ".join(failed) + (f" ({', '.join(stopped)} stopped)" if stopped else "")
 
     # ================================================================ jogging
-    def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base") -> None:
-        """One JogCommand to its group's arm. A group no arm has: refused on every arm (a release, direction 0,
-        stops whatever jogs)."""
+    def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base",
+            age_s: Optional[float] = None) -> None:
+        """One JogCommand to its group's arm (age_s: how long ago the BFF let it through, None: unknown). A group no
+        arm has: refused on every arm (a release, direction 0, stops whatever jogs)."""
         d = self.driver_of(group)
         if d is not None:
-            d.jog(group, mode, axis, direction, speed, frame)
+            d.jog(group, mode, axis, direction, speed, frame, age_s)
             return
         for d in self.drivers:
             if direction == 0:

@@ -897,11 +897,19 @@ class ManualDriver:
             self.sleep(POLL_S)
 
     # ================================================================ jogging
-    def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base") -> None:
-        """One JogCommand. Never answers: what happened shows in the state's motion and message."""
+    def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base",
+            age_s: Optional[float] = None) -> None:
+        """One JogCommand. Never answers: what happened shows in the state's motion and message. age_s: how long
+        ago the BFF let it through (None: unknown, e.g. published on ROS directly)."""
         cmd = Jog(group, mode, int(axis), int(max(-1, min(1, direction))), float(speed), frame or "base")
         if cmd.direction == 0:
             self._stop_jog("jog stopped")
+            return
+        if age_s is not None and age_s > self._jog.timeout:
+            # A late heartbeat (a stalled link or node delivering a backlog): it neither restarts motion the watchdog
+            # stopped nor keeps a jog alive, nor moves the arm for a session that lost control since it was sent.
+            self._set_message(f"jog ignored: it arrived {age_s:.2f} s after it was sent (more than the jog timeout, "
+                              f"{self._jog.timeout:.2f} s)")
             return
         try:
             g = self.find_group(group)
