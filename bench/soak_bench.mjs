@@ -22,7 +22,9 @@
 //   from home (a run stopped or failed mid-cycle) is first moved straight up when low, then home (Move to pose,
 //   Move to home): swinging the base with the fingers around a part in the fixture ends in a protective stop. A
 //   jog is done when the driver's state shows the joint moved > 0.005 rad (soak_cell.mjs MOVED_RAD), refused
-//   otherwise (the BFF's or the driver's reason noted); travel median and minimum per minute.
+//   otherwise (the BFF's or the driver's reason noted); travel median and minimum per minute. Heartbeats the driver
+//   dropped because they reached it later than the jog timeout (docs/ros-interfaces.md) are counted apart: the
+//   jog's motion may pause, and the host's load shows in how many there are.
 // - a running process (operator, the Process page): /cell/process/state and /log and the status fields' topics;
 //   takes the lease, Start {cycles}, releases the lease when the run ended; cycles counted from the state's
 //   cycle counter.
@@ -116,7 +118,7 @@ const newWindow = () => ({ sent: 0, received: 0, perClient: new Uint32Array(CLIE
 let win = newWindow();
 const total = newWindow();
 /** The cell's figures of one minute (bench/soak_cell.mjs writes them). */
-const newCellWindow = () => ({ camFrames: 0, camBytes: 0, camBad: 0, camMaxGapMs: 0, jogOk: 0, jogRefused: 0, jogTravel: [], cycles: 0, cycleTimes: [], runs: 0,
+const newCellWindow = () => ({ camFrames: 0, camBytes: 0, camBad: 0, camMaxGapMs: 0, jogOk: 0, jogRefused: 0, jogLate: 0, jogTravel: [], cycles: 0, cycleTimes: [], runs: 0,
   processErrors: 0, processLogErrors: 0, restocked: 0, restockErrors: 0, homed: 0, leaseTakes: 0, leaseRefused: 0, leaseLost: 0 });
 let cellWin = newCellWindow();
 const cellTotal = newCellWindow();
@@ -335,7 +337,7 @@ const row = (r) => [
 const f0 = (x) => (Number.isFinite(x) ? x.toFixed(0) : '-');
 /** The cell's figures of one minute, one line. */
 const cellLine = (c) => `     cell: camera ${c.camFrames} frames (${f1(c.camFps)} fps, max gap ${f2(c.camMaxGapMs / 1000)} s, ${f1(c.camMiB)} MiB${c.camBad ? `, ${c.camBad} bad` : ''})` +
-  ` | jogs ${c.jogOk} done, ${c.jogRefused} refused${c.jogOk ? ` (travel median ${f2(c.jogTravelMedian)}, min ${f2(c.jogTravelMin)} rad)` : ''}${c.homed ? `, ${c.homed}x homed first` : ''}` +
+  ` | jogs ${c.jogOk} done, ${c.jogRefused} refused${c.jogLate ? `, ${c.jogLate} late heartbeats dropped` : ''}${c.jogOk ? ` (travel median ${f2(c.jogTravelMedian)}, min ${f2(c.jogTravelMin)} rad)` : ''}${c.homed ? `, ${c.homed}x homed first` : ''}` +
   ` | process ${c.cycles} cycles${c.cycles ? ` (median ${f1(c.cycleMedianS)} s)` : ''}, ${c.runs} starts, ${c.processErrors} errors${c.processLogErrors ? ` (${c.processLogErrors} error log entries)` : ''}` +
   ` | parts put back ${c.restocked}${c.restockErrors ? `, ${c.restockErrors} failed` : ''} | lease ${c.leaseTakes} taken${c.leaseRefused ? `, ${c.leaseRefused} refused` : ''}${c.leaseLost ? `, ${c.leaseLost} lost` : ''}` +
   ` | log errors ${c.logErrors}`;
@@ -432,7 +434,7 @@ async function main() {
     const newErrors = logs.scanNew();
     const c = {
       camFrames: cw.camFrames, camFps: cw.camFrames / elapsedS, camMaxGapMs: cw.camMaxGapMs, camMiB: cw.camBytes / 1048576, camBad: cw.camBad,
-      jogOk: cw.jogOk, jogRefused: cw.jogRefused, jogTravelMedian: median(cw.jogTravel), jogTravelMin: Math.min(...cw.jogTravel), homed: cw.homed, cycles: cw.cycles, cycleMedianS: median(cw.cycleTimes), runs: cw.runs,
+      jogOk: cw.jogOk, jogRefused: cw.jogRefused, jogLate: cw.jogLate, jogTravelMedian: median(cw.jogTravel), jogTravelMin: Math.min(...cw.jogTravel), homed: cw.homed, cycles: cw.cycles, cycleMedianS: median(cw.cycleTimes), runs: cw.runs,
       processErrors: cw.processErrors, processLogErrors: cw.processLogErrors, restocked: cw.restocked, restockErrors: cw.restockErrors,
       leaseTakes: cw.leaseTakes, leaseRefused: cw.leaseRefused, leaseLost: cw.leaseLost, logErrors: newErrors.length,
     };
@@ -485,7 +487,7 @@ async function main() {
     `latency p50 ${f2(total.lat.pct(50))} / p99 ${f2(total.lat.pct(99))} / max ${f2(total.lat.max)} ms; ` +
     `service calls ok ${total.svcOk}, failed ${total.svcFail}, timed out ${total.svcTimeout}, p50 ${f2(total.svcLat.pct(50))} / p99 ${f2(total.svcLat.pct(99))} ms; ` +
     `status/errors ${total.status + total.wsErrors}, socket closes ${total.closes}, reconnects ${total.reconnects}, skipped publish ticks ${total.skippedTicks}`);
-  console.log(`cell: camera ${cellTotal.camFrames} frames (${f1(cellTotal.camFrames / soakS)} fps, ${cellTotal.camBad} bad); jogs ${cellTotal.jogOk} done, ${cellTotal.jogRefused} refused` +
+  console.log(`cell: camera ${cellTotal.camFrames} frames (${f1(cellTotal.camFrames / soakS)} fps, ${cellTotal.camBad} bad); jogs ${cellTotal.jogOk} done, ${cellTotal.jogRefused} refused, ${cellTotal.jogLate} late heartbeats dropped by the driver` +
     ` (travel median ${f2(median(cellTotal.jogTravel))}, min ${f2(Math.min(...cellTotal.jogTravel))} rad); process ${cellTotal.cycles} cycles (median ${f1(median(cellTotal.cycleTimes))} s) in ${cellTotal.runs} starts, ${cellTotal.processErrors} errors;` +
     ` parts put back ${cellTotal.restocked}, ${cellTotal.restockErrors} failed; lease taken ${cellTotal.leaseTakes}, refused ${cellTotal.leaseRefused}, lost ${cellTotal.leaseLost};` +
     ` camera/jog/process sockets reconnected ${cellLinks.map((l) => l.reconnects).reduce((a, b) => a + b, 0)} times`);

@@ -309,7 +309,11 @@ export class ManualSession {
     this.link.subscribe(`/cell/manual/${this.group}/state`, 'cell_msgs/RobotState', {}, (m) => {
       this.state = m;
       this.stateAt = now();
-      if (/^jog (refused|ignored)/.test(String(m?.message))) this.lastDriverRefusal = String(m.message);
+      const text = String(m?.message);
+      // A heartbeat that reached the driver later than the jog timeout is dropped (a jog's motion may pause): counted,
+      // not a refusal (the arm's travel tells whether the jog moved it).
+      if (/^jog ignored: it arrived/.test(text)) { if (text !== this.lastLate) this.win().jogLate++; this.lastLate = text; }
+      else if (/^jog (refused|ignored)/.test(text)) this.lastDriverRefusal = text;
     });
     this.link.advertise('/cell/manual/jog', 'cell_msgs/JogCommand', { queue_size: 1 });
     const r = await this.link.call('/cell/manual/groups', {}, 5000);
