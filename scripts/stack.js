@@ -20,6 +20,8 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import v8 from 'node:v8';
+import vm from 'node:vm';
 import { readEnv, REPO_ROOT } from '../bff/src/core/config/env.js';
 import { loadCell, CellConfigError } from '../bff/src/core/config/cell.js';
 import { FEATURES } from '../bff/src/features/index.js';
@@ -382,6 +384,13 @@ process.on('SIGHUP', () => shutdown(0));
 process.on('uncaughtException', (e) => { err.line(`[stack] ${e.stack || e}`); shutdown(1); });
 const parent = process.ppid;
 setInterval(() => { if (process.ppid !== parent) shutdown(1); }, 500).unref();
+// The supervisor allocates little (child output lines, a health probe every few seconds), so V8 seldom runs a major
+// GC: what outlives two scavenges piles up in the old space until the next one (--trace-gc in the soak: 13 -> 19 MB
+// in 5 minutes, no Mark-Compact), and the RSS climbed 0.5 MiB/min for half an hour. A full GC once a minute (a few
+// ms on a heap this small) keeps it flat.
+v8.setFlagsFromString('--expose-gc');
+const fullGc = /** @type {() => void} */ (vm.runInNewContext('gc'));
+setInterval(fullGc, 60_000).unref();
 
 async function main() {
   let cell;
