@@ -17,7 +17,7 @@ from cell_nodes.manual import frames
 from cell_nodes.manual.cell_driver import CellDriver
 from cell_nodes.manual.config import (UR_JOINTS, ConfigError, DigitalOut, MoveNamedStep, Wait, WaitInput, parse_manual,
                                       plan_arms, resolve_hosts, ur_joint_index)
-from cell_nodes.manual.controller import CallTimeout, Gate, fk_lever
+from cell_nodes.manual.controller import CallTimeout, ClientGone, Gate, Guarded, fk_lever
 from cell_nodes.manual.driver import DriverState, ManualDriver, Snapshot
 from cell_nodes.manual.jog import Decision, Jog, JogSupervisor
 from cell_nodes.manual.limits import (STOP_DECEL_JOINT, STOP_DECEL_TCP, TCP_COMMAND_MARGIN, TCP_SPEED_CAP,
@@ -252,6 +252,9 @@ class FakeRobot:
         self.hold = False          # keep moves running until released
         self.gripper_sensor = True  # DI1 follows DO0, like the sim's gripper
         self.lock = threading.Lock()
+        self.closed: list[str] = []  # clients disconnected, by kind
+        self.stall: dict[str, threading.Event] = {}  # a control call that does not return until its event is set
+        self.inside = threading.Event()             # set when a stalled call is entered
 
     # what a test looks at
     def moves(self, name: str) -> list[tuple]:
@@ -263,7 +266,7 @@ class FakeReceive:
         self.r = robot
 
     def isConnected(self) -> bool: return self.r.connected
-    def disconnect(self) -> None: pass
+    def disconnect(self) -> None: self.r.closed.append("receive")
 
     def getTimestamp(self) -> float:
         self.r.ts += 0.002
@@ -292,7 +295,12 @@ class FakeControl:
     def isProgramRunning(self): return self.r.runtime == 2
     def reuploadScript(self): self._rec("reuploadScript"); self.r.runtime = 2; return True
     def stopScript(self): self._rec("stopScript")
-    def disconnect(self): pass
+    def disconnect(self): self.r.closed.append("control")
+
+    def _stall(self, name: str) -> None:
+        if name in self.r.stall:
+            self.r.inside.set()
+            self.r.stall[name].wait(10)
 
     def moveJ(self, q, speed, acceleration, asynchronous):
         self._rec("moveJ", list(q), speed, acceleration, asynchronous)
@@ -305,6 +313,7 @@ class FakeControl:
         return True
 
     def getAsyncOperationProgress(self) -> int:
+        self._stall("getAsyncOperationProgress")
         if self.r.pending is None:
             return -1
         if self.r.hold:
@@ -319,6 +328,7 @@ class FakeControl:
         return 0
 
     def speedJ(self, qd, acceleration, time):
+        self._stall("speedJ")
         self._rec("speedJ", list(qd), acceleration)
         self.r.qd = list(qd)
         return True
@@ -382,7 +392,7 @@ class FakeIO:
             self.r.di = (self.r.di | 2) if signal_level else (self.r.di & ~2)
         return True
 
-    def disconnect(self) -> None: pass
+    def disconnect(self) -> None: self.r.closed.append("io")
 
 
 class FakeConnector:
@@ -425,11 +435,12 @@ class FakeDashboard:
         self.r.runtime = 1
 
 
-def make_driver(robot: FakeRobot, section: Optional[dict] = None, clock: Optional[FakeClock] = None) -> ManualDriver:
+def make_driver(robot: FakeRobot, section: Optional[dict] = None, clock: Optional[FakeClock] = None,
+                call_timeout: float = 1.0) -> ManualDriver:
     section = section or demo_section()
     clock = clock or FakeClock()
     d = ManualDriver(parse_manual(section), "10.0.0.5", FakeConnector(robot), Limits.from_section(parse_manual(
-        section).limits), clock=clock, sleep=clock.sleep)
+        section).limits), clock=clock, sleep=clock.sleep, call_timeout=call_timeout)
     return d
 
 
@@ -749,6 +760,64 @@ def test_stale_data_means_the_controller_is_gone(robot: FakeRobot) -> None:
         assert not d.connected
     finally:
         FakeReceive.getTimestamp = saved
+
+
+def test_a_dropped_client_closes_only_once_no_call_is_inside_it() -> None:
+    inside, release = threading.Event(), threading.Event()
+    events: list[str] = []
+
+    class Client:
+        def slow(self) -> int:
+            inside.set()
+            release.wait(10)
+            events.append("slow returned")
+            return 1
+
+        def fast(self) -> int: return 2
+        def disconnect(self) -> None: events.append("disconnect")
+
+    g = Guarded(Client())
+    assert g.fast() == 2 and hasattr(g, "fast") and not hasattr(g, "getMoveError")
+    caller = threading.Thread(target=g.slow)
+    caller.start()
+    assert inside.wait(10)
+    with pytest.raises(ClientGone):  # a second thread never enters a client another one is inside
+        g.fast()
+    dropper = threading.Thread(target=g.drop)
+    dropper.start()
+    dropper.join(0.3)
+    assert dropper.is_alive() and events == []  # the disconnect waits for the call inside
+    release.set()
+    dropper.join(10)
+    caller.join(10)
+    assert events == ["slow returned", "disconnect"]
+    with pytest.raises(ClientGone):
+        g.fast()
+    g.drop()
+    assert events.count("disconnect") == 1
+
+
+def test_a_lost_controller_is_never_disconnected_under_a_call_still_inside_it(robot: FakeRobot) -> None:
+    # CI: the node died with SIGSEGV when, after a call the gate gave up on, the lost connection's clients were
+    # disconnected while that call was still inside ur_rtde (its own reconnect met the disconnect).
+    d = make_driver(robot, call_timeout=0.3)
+    assert d.connect()
+    assert d.move_named("arm", "home")[0]  # the control client exists
+    release = threading.Event()
+    robot.stall["speedJ"] = release
+    jog = threading.Thread(target=d.jog, args=("arm", "joint", 0, 1, 0.5, "base"))
+    jog.start()
+    assert robot.inside.wait(10)
+    wait_for(lambda: not d.connected, 10)
+    wait_for(lambda: sorted(robot.closed) == ["io", "receive"], 10)  # the clients nobody is inside close at once
+    assert robot.closed.count("control") == 0
+    assert d.connect()  # a new connection meanwhile: moves are refused until it has its own control client
+    release.set()
+    wait_for(lambda: "control" in robot.closed, 10)  # the old one closes once its call came back
+    jog.join(10)
+    robot.qd = [0.0] * 6  # (the fake arm keeps the speed the late speedJ set)
+    assert d.move_named("arm", "home") == (True, "arrived at home")  # through a new control client
+    assert robot.controls == 2
 
 
 def test_groups_service_content(driver: ManualDriver) -> None:

@@ -6,6 +6,8 @@ TCP speeds measured here are wall-clock figures.
 """
 from __future__ import annotations
 
+import os
+import subprocess
 import threading
 import time
 from pathlib import Path
@@ -18,7 +20,7 @@ import yaml
 
 from cell_nodes.manual import frames
 from cell_nodes.manual.config import UR_JOINTS, parse_manual
-from cell_nodes.manual.controller import UrRtdeConnector
+from cell_nodes.manual.ur_process import UrRtdeConnector
 from cell_nodes.manual.driver import ManualDriver
 from cell_nodes.manual.limits import Limits
 from conftest import wait_for
@@ -27,6 +29,7 @@ from nodes_helpers import start_sim
 HOST = "127.0.0.51"          # the module's sim
 RESTART_HOST = "127.0.0.52"  # the reconnection test's own sim
 SLOW_HOST = "127.0.0.53"     # a controller slow to start programs
+FREEZE_HOST = "127.0.0.54"   # the frozen-controller test's own sim
 SECTION = yaml.safe_load((Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml").read_text())["manual"]
 CONFIGS = {name: list(q) for name, q in SECTION["groups"][0]["configurations"].items()}
 HEARTBEAT_S = 0.05           # the page's jog heartbeat period
@@ -321,6 +324,50 @@ def test_reconnects_after_the_controller_restarts() -> None:
     finally:
         driver.shutdown()
         sim.stop()
+
+
+def ur_children(host: str) -> list[int]:
+    """The pids of this process's ur_rtde children (ur_process) for a controller, alive."""
+    found = []
+    for pid in os.listdir("/proc"):
+        try:
+            stat = Path(f"/proc/{pid}/stat").read_text()
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes()
+        except (OSError, ValueError):
+            continue
+        fields = stat[stat.rindex(")") + 2:].split()
+        if fields[0] != "Z" and int(fields[1]) == os.getpid() and b"cell_nodes.manual.ur_process" in cmd \
+                and host.encode() in cmd.split(b"\0"):
+            found.append(int(pid))
+    return found
+
+
+def test_a_controller_silent_mid_move_is_a_lost_connection_never_a_crash() -> None:
+    """CI: the node died with SIGSEGV when the sim's data paused mid-move. ur_rtde closes a stream silent for 2.5 s,
+    its control client reconnects on its own thread, and that raced the driver's call. Its clients now live in a
+    child process per connection: the move fails, the driver reconnects, and one child is left (the old control
+    client no longer fights the new one for the controller)."""
+    sim = start_sim(FREEZE_HOST, "--no-ros", "--no-cameras")
+    driver = make_driver(FREEZE_HOST)
+    try:
+        for target in ("pick_approach", "home", "pick_approach"):
+            result: list[tuple[bool, str]] = []
+            move = threading.Thread(target=lambda: result.append(driver.move_named("arm", target, 0.3, 0.5)))
+            move.start()
+            wait_for(lambda: driver.state().motion != "idle", 10, interval=0.01, what="the move started")
+            # Frozen by a helper process: a ur_rtde call that blocks may hold this process's GIL.
+            subprocess.run(["sh", "-c", f"kill -STOP {sim.proc.pid}; sleep 3; kill -CONT {sim.proc.pid}"], check=True,
+                           timeout=10)
+            move.join(20)
+            assert result == [(False, f"robot controller at {FREEZE_HOST} is unreachable")]
+            wait_for(lambda: driver.state().connected, 20, interval=0.02, what="reconnected")
+            wait_for(lambda: len(ur_children(FREEZE_HOST)) == 1, 10, what="one ur_rtde child left")
+        ok, why = driver.move_named("arm", "home", 1.0, 1.5)
+        assert (ok, why) == (True, "arrived at home")
+    finally:
+        driver.shutdown()
+        sim.stop()
+    wait_for(lambda: not ur_children(FREEZE_HOST), 10, what="no ur_rtde child after shutdown")
 
 
 def test_the_node_keeps_reading_the_arm_while_a_slow_controller_starts_the_control_script() -> None:

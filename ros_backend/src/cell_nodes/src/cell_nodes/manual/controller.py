@@ -1,6 +1,6 @@
 """The robot controller as the driver sees it: ur_rtde's three interfaces behind small protocols (so tests use a
-fake and the node the real `rtde_control`, `rtde_receive`, `rtde_io` modules), UR mode names, and the gate every
-call goes through.
+fake, and the node the real `rtde_control`, `rtde_receive`, `rtde_io` modules in a child process: ur_process), UR
+mode names, and the gate every call goes through.
 
 Why a gate: ur_rtde's clients are not thread-safe, so every call takes one lock; and a control call made while the
 controller vanishes can block forever (seen with speedStop after the controller died: it never returned). The gate
@@ -68,6 +68,12 @@ class ControlInterface(Protocol):
     # def getJointLimitError(self, q: list[float]) -> str: ...  (why moveJ would refuse q, "" when it would not)
 
 
+# What one poll reads (driver.read_snapshot), in this order; a client with readState() answers them in one call.
+STATE_GETTERS = ("isConnected", "getTimestamp", "getActualQ", "getActualQd", "getActualTCPPose",
+                 "getActualTCPSpeed", "getRobotMode", "getSafetyMode", "getSpeedScaling", "getRuntimeState",
+                 "getActualDigitalInputBits", "getActualDigitalOutputBits")
+
+
 class ReceiveInterface(Protocol):
     """The part of rtde_receive.RTDEReceiveInterface the driver uses."""
 
@@ -112,31 +118,6 @@ class Connector(Protocol):
     def io(self, host: str) -> IOInterface: ...
     def control(self, host: str) -> ControlInterface: ...
     def dashboard(self, host: str) -> DashboardInterface: ...
-
-
-class UrRtdeConnector:
-    """The real thing: the unmodified ur_rtde pip package."""
-
-    control_takes_over = True   # RTDEControlInterface uploads its script: another running program ends
-
-    def receive(self, host: str) -> ReceiveInterface:
-        import rtde_receive
-        return rtde_receive.RTDEReceiveInterface(host)
-
-    def io(self, host: str) -> IOInterface:
-        import rtde_io
-        return rtde_io.RTDEIOInterface(host)
-
-    def control(self, host: str) -> ControlInterface:
-        import rtde_control
-        # Made without uploading the script: the constructor holds the GIL until the script runs, which froze the
-        # whole node (every arm's jog watchdog, every poll) for as long as that took. The driver starts the script
-        # with reuploadScript and waits for it itself (see ManualDriver._control).
-        return rtde_control.RTDEControlInterface(host, -1.0, int(rtde_control.RTDEControlInterface.FLAG_NO_WAIT))
-
-    def dashboard(self, host: str) -> DashboardInterface:
-        import dashboard_client
-        return dashboard_client.DashboardClient(host)
 
 
 class CallTimeout(RuntimeError):
@@ -216,6 +197,64 @@ def keep_forever(client: object) -> None:
     arrive as Python exceptions there) and then leaked: a few kB per lost connection."""
     import ctypes
     ctypes.pythonapi.Py_IncRef(ctypes.py_object(client))
+
+
+class ClientGone(RuntimeError):
+    """A call on a controller client the driver has dropped, or that another thread is still inside."""
+
+
+class Guarded:
+    """A controller client used by one thread at a time and never after it is dropped.
+
+    Why: a client is not made to be closed on one thread while another is inside one of its calls. The gate
+    serialises calls, but a call it gave up on (CallTimeout) still runs on its abandoned worker when the driver drops
+    the lost connection's clients. So each client has its own lock: a call that finds it taken fails at once (the
+    client is being dropped, or a call that never came back is inside it), and drop() ends or waits for the call
+    inside before it disconnects. Methods are looked up on the client, so hasattr/getattr see its own."""
+
+    def __init__(self, client: Any) -> None:
+        self._client = client
+        self._lock = threading.Lock()
+        self._dropped = False
+
+    def __getattr__(self, name: str) -> Any:
+        attr = getattr(self._client, name)
+        if not callable(attr):
+            return attr
+
+        def call(*args: Any, **kwargs: Any) -> Any:
+            if not self._lock.acquire(blocking=False):
+                raise ClientGone(f"{name}: the client is in use by a call that did not come back, or being closed")
+            try:
+                if self._dropped:
+                    raise ClientGone(f"{name}: the client was dropped")
+                return attr(*args, **kwargs)
+            finally:
+                self._lock.release()
+        return call
+
+    @property
+    def dropped(self) -> bool:
+        return self._dropped
+
+    def drop(self, stop_script: bool = False) -> None:
+        """Disconnect, once no call is inside the client; later calls raise ClientGone. A client that can end a call
+        inside it at once (kill: the child process of ur_process) does so instead of waiting for it."""
+        if not self._lock.acquire(blocking=False):
+            kill = getattr(self._client, "kill", None)
+            if kill is not None:
+                kill()
+            self._lock.acquire()
+        try:
+            if self._dropped:
+                return
+            self._dropped = True
+            c = self._client
+            if stop_script and hasattr(c, "stopScript") and c.isConnected():
+                c.stopScript()
+            c.disconnect()
+        finally:
+            self._lock.release()
 
 
 def fk_lever(fk: Callable[[Sequence[float]], Sequence[float]], q: Sequence[float], joint: int,

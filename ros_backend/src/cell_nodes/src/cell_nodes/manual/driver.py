@@ -23,13 +23,13 @@ import math
 import threading
 import time
 from dataclasses import dataclass, field, replace
-from typing import Callable, Optional, Sequence, TypeVar
+from typing import Callable, Optional, Sequence, TypeVar, cast
 
 from . import frames
 from .config import DigitalOut, Group, ManualConfig, MoveNamedStep, UR_JOINTS, Wait, WaitInput
-from .controller import (RUNTIME_PLAYING, CallTimeout, Connector, ControlInterface, Gate, IOInterface,
-                         ReceiveInterface, fk_lever, keep_forever, robot_mode_name, run_with_timeout,
-                         safety_mode_name)
+from .controller import (RUNTIME_PLAYING, STATE_GETTERS, CallTimeout, ClientGone, Connector, ControlInterface, Gate,
+                         Guarded, IOInterface, ReceiveInterface, fk_lever, keep_forever, robot_mode_name,
+                         run_with_timeout, safety_mode_name)
 from .jog import CARTESIAN, FRAMES, JOINT, Decision, Jog, JogSupervisor
 from .limits import STOP_DECEL_JOINT, STOP_DECEL_TCP, WATCHDOG_DECEL_JOINT, WATCHDOG_DECEL_TCP, Limits
 
@@ -126,16 +126,16 @@ class MoveTarget:
 
 
 def read_snapshot(recv: ReceiveInterface) -> Snapshot:
-    """All the state one poll needs, in one gate call."""
-    return Snapshot(connected=bool(recv.isConnected()), timestamp=float(recv.getTimestamp()),
-                    q=tuple(recv.getActualQ()), qd=tuple(recv.getActualQd()),
-                    tcp_pose=tuple(recv.getActualTCPPose()), tcp_speed=tuple(recv.getActualTCPSpeed()),
-                    robot_mode=robot_mode_name(recv.getRobotMode()),
-                    safety_mode=safety_mode_name(recv.getSafetyMode()),
-                    speed_scaling=float(recv.getSpeedScaling()),
-                    program_running=recv.getRuntimeState() == RUNTIME_PLAYING,
-                    digital_in=int(recv.getActualDigitalInputBits()),
-                    digital_out=int(recv.getActualDigitalOutputBits()))
+    """All the state one poll needs, in one gate call (one round trip where the client reads them at once)."""
+    read_all = getattr(recv, "readState", None)
+    values = read_all() if read_all is not None else tuple(getattr(recv, g)() for g in STATE_GETTERS)
+    (connected, timestamp, q, qd, tcp_pose, tcp_speed, robot_mode, safety_mode, speed_scaling, runtime_state,
+     digital_in, digital_out) = values
+    return Snapshot(connected=bool(connected), timestamp=float(timestamp), q=tuple(q), qd=tuple(qd),
+                    tcp_pose=tuple(tcp_pose), tcp_speed=tuple(tcp_speed), robot_mode=robot_mode_name(robot_mode),
+                    safety_mode=safety_mode_name(safety_mode), speed_scaling=float(speed_scaling),
+                    program_running=runtime_state == RUNTIME_PLAYING, digital_in=int(digital_in),
+                    digital_out=int(digital_out))
 
 
 def _finite(values: Sequence[float]) -> bool:
@@ -232,7 +232,8 @@ class ManualDriver:
             if self._connected:
                 return True
             try:
-                recv = run_with_timeout(lambda: self._connector.receive(self.host), 5.0, "ur-connect")
+                recv = cast(ReceiveInterface, Guarded(
+                    run_with_timeout(lambda: self._connector.receive(self.host), 5.0, "ur-connect")))
             except Exception as e:
                 log.debug("connect to %s failed: %s", self.host, e)
                 # A backend that knows why (ros_control: no joint states, a URDF that does not load) says so.
@@ -240,7 +241,8 @@ class ManualDriver:
                 self._set_message(f"{self._unreachable()}: {why}" if why else self._unreachable())
                 return False
             try:
-                io = run_with_timeout(lambda: self._connector.io(self.host), 5.0, "ur-connect")
+                io = cast(IOInterface, Guarded(
+                    run_with_timeout(lambda: self._connector.io(self.host), 5.0, "ur-connect")))
             except Exception as e:
                 log.debug("IO interface at %s failed: %s", self.host, e)
                 self._dispose_later((recv,))
@@ -281,19 +283,19 @@ class ManualDriver:
         self.on_change()
 
     def _dispose_later(self, clients: Sequence[object]) -> None:
-        # Why a thread: disconnecting from a controller that vanished can block (ur_rtde retries inside).
-        threading.Thread(target=self._dispose, args=(clients,), name="ur-dispose", daemon=True).start()
+        # Why threads, one per client: disconnecting from a controller that vanished can block (ur_rtde retries
+        # inside), and a client waits for a call still inside it (Guarded.drop) without holding up the others.
+        for c in clients:
+            if c is not None:
+                threading.Thread(target=self._dispose, args=((c,),), name="ur-dispose", daemon=True).start()
 
     @staticmethod
     def _dispose(clients: Sequence[object], stop_script: bool = False) -> None:
         for c in clients:
             if c is None:
                 continue
-            keep_forever(c)  # before anything can fail: see keep_forever
             try:
-                if stop_script and hasattr(c, "stopScript") and c.isConnected():  # type: ignore[attr-defined]
-                    c.stopScript()  # type: ignore[attr-defined]
-                c.disconnect()  # type: ignore[attr-defined]
+                cast(Guarded, c).drop(stop_script)  # waits for a call still inside it (see Guarded)
             except Exception as e:
                 log.debug("disconnect: %s", e)
 
@@ -315,7 +317,8 @@ class ManualDriver:
                     raise Refused("another program runs on the robot controller: a preview does not take it over "
                                   "(a move would stop it)")
                 try:
-                    ctl = run_with_timeout(lambda: self._connector.control(self.host), 10.0, "ur-control")
+                    ctl = cast(ControlInterface, Guarded(
+                        run_with_timeout(lambda: self._connector.control(self.host), 10.0, "ur-control")))
                 except Exception as e:
                     raise Refused(f"cannot start the control script on the robot controller at {self.host}: {e}")
                 with self._cmd_lock:
@@ -350,6 +353,8 @@ class ManualDriver:
             return self._gate.call(fn, timeout)
         except CallTimeout as e:
             threading.Thread(target=self._lose, args=(str(e),), daemon=True).start()
+            raise Refused(self._unreachable()) from None
+        except ClientGone:  # a client of a connection already lost (see Guarded)
             raise Refused(self._unreachable()) from None
         except Refused:
             raise
@@ -391,7 +396,8 @@ class ManualDriver:
         try:
             snap = self._gate.call(lambda: read_snapshot(recv))
         except Exception as e:
-            self._lose(f"reading the robot state failed: {e}")
+            if self._recv is recv:  # (not a client already dropped: that connection is gone)
+                self._lose(f"reading the robot state failed: {e}")
             return None
         if not snap.connected:
             self._lose("RTDE connection closed")
