@@ -2,7 +2,7 @@
 // and desktop profiles (playwright.config.js). The arm is watched from outside the app (the driver's /joint_states
 // on the stack's rosbridge).
 import { test, expect } from '@playwright/test';
-import { sessionCookie, rosSocket } from '../lib/app.js';
+import { sessionCookie, rosSocket, loginAs } from '../lib/app.js';
 import { watchRobot } from '../lib/robot.js';
 import { cell, arm, jogMsg, STILL, openManual, expectStandstill, holdJog } from '../lib/manual.js';
 
@@ -36,6 +36,35 @@ test('an admin takes control, moves to a named configuration, jogs, and the arm 
   expect(robot.joints()[0]).toBeGreaterThan(q0 + 0.01);
   await page.getByRole('button', { name: 'Release control' }).click();
   await expect(jog).toBeDisabled();
+});
+
+test('Stop robot from another session while the holder still holds a jog button: the arm stays stopped until a new press', async ({ page, browser, baseURL }) => {
+  await openManual(page);
+  await page.getByRole('button', { name: 'Take control' }).click();
+  const holder = page.getByTestId('lease-holder');
+  await expect(holder).toContainText('You have control');
+  // An operator, without the lease, on its own phone or tablet: Stop robot is in its top bar.
+  const other = await browser.newContext({ ...test.info().project.use, baseURL });
+  try {
+    const op = await other.newPage();
+    await loginAs(op, 'operator');
+    await holdJog(page, robot, 'Jog joint 1 -');
+    await op.getByRole('button', { name: 'Stop robot' }).click();
+    await expectStandstill(robot);
+    // The holder's thumb is still down and its page goes on sending that press: the arm stays where it stopped.
+    const held = await robot.observe(125);
+    expect(held.travel, `travel over 1 s of joint states with the button still held (largest speed ${held.maxSpeed} rad/s)`).toBeLessThan(STILL.rad);
+    await page.mouse.up();
+    const q0 = robot.joints()[0];
+    await holdJog(page, robot, 'Jog joint 1 -'); // a new press moves it
+    await page.mouse.up();
+    await expectStandstill(robot);
+    expect(robot.joints()[0]).toBeLessThan(q0 - 0.01);
+    await page.getByRole('button', { name: 'Release control' }).click();
+    await expect(holder).not.toContainText('You have control');
+  } finally {
+    await other.close();
+  }
 });
 
 test('an operator sees the Manual page but cannot move the arm, and is told why', async ({ page, context, baseURL }) => {

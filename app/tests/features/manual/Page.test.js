@@ -177,7 +177,7 @@ describe('Manual motion page', () => {
     const jog = button('Jog joint 1 +');
     expect(jogTopic()?.advertised).toBe(true);
     await fireEvent.pointerDown(jog, { pointerId: 1, button: 0, pointerType: 'touch' });
-    expect(jogSent()).toEqual([{ group: 'arm', mode: 'joint', axis: 0, direction: 1, speed: 0.25, frame: 'base' }]);
+    expect(jogSent().map(({ press, ...m }) => m)).toEqual([{ group: 'arm', mode: 'joint', axis: 0, direction: 1, speed: 0.25, frame: 'base' }]);
     expect(jog.getAttribute('aria-pressed')).toBe('true');
     vi.advanceTimersByTime(100);
     expect(jogSent().length).toBe(3);
@@ -197,9 +197,11 @@ describe('Manual motion page', () => {
     expect(screen.getByTestId('jog-speed-value').textContent).toContain('100 mm/s · 0.40 rad/s');
     await fireEvent.pointerDown(button('Jog RZ -'), { pointerId: 3, button: 0, pointerType: 'mouse' });
     await fireEvent.pointerUp(button('Jog RZ -'), { pointerId: 3 });
+    const press = jogSent()[0].press;
+    expect(press).toBeGreaterThan(0);
     expect(jogSent()).toEqual([
-      { group: 'arm', mode: 'cartesian', axis: 5, direction: -1, speed: 0.4, frame: 'tool' },
-      { group: 'arm', mode: 'cartesian', axis: 5, direction: 0, speed: 0.4, frame: 'tool' },
+      { group: 'arm', mode: 'cartesian', axis: 5, direction: -1, speed: 0.4, frame: 'tool', press },
+      { group: 'arm', mode: 'cartesian', axis: 5, direction: 0, speed: 0.4, frame: 'tool', press },
     ]);
   });
 

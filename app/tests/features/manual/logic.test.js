@@ -323,6 +323,8 @@ describe('JogHold: hold-to-run', () => {
     });
     return {
       hold, sent, changes,
+      /** the messages without their press number */
+      plain: () => sent.map(({ press, ...m }) => m),
       /** @param {boolean} v */ setAllowed: (v) => (allowed = v),
       /** @param {boolean} v */ setFail: (v) => (fail = v),
       directions: () => sent.map((m) => m.direction),
@@ -332,17 +334,17 @@ describe('JogHold: hold-to-run', () => {
   it('publishes at once and every 50 ms while held, then exactly one stop on release', () => {
     const t = setup();
     expect(t.hold.start(msg)).toBe(true);
-    expect(t.sent).toEqual([msg]);
+    expect(t.plain()).toEqual([msg]);
     vi.advanceTimersByTime(JOG_PERIOD_MS - 1);
     expect(t.sent.length).toBe(1);
     vi.advanceTimersByTime(1);
     expect(t.sent.length).toBe(2);
     vi.advanceTimersByTime(4 * JOG_PERIOD_MS);
     expect(t.directions()).toEqual([1, 1, 1, 1, 1, 1]);
-    expect(t.hold.active).toEqual(msg);
+    expect(t.hold.active).toEqual({ ...msg, press: t.sent[0].press });
 
     expect(t.hold.stop()).toBe(true);
-    expect(t.sent.at(-1)).toEqual({ ...msg, direction: 0 });
+    expect(t.plain().at(-1)).toEqual({ ...msg, direction: 0 });
     // Release, pointercancel and lostpointercapture may all arrive: still one stop.
     expect(t.hold.stop('pointer cancelled')).toBe(false);
     expect(t.hold.stop('pointer capture lost')).toBe(false);
@@ -407,14 +409,30 @@ describe('JogHold: hold-to-run', () => {
     vi.advanceTimersByTime(20);
     const other = { ...msg, axis: 3, direction: /** @type {const} */ (-1) };
     t.hold.start(other);
-    expect(t.sent.at(-1)).toEqual(other);
+    expect(t.plain().at(-1)).toEqual(other);
     expect(vi.getTimerCount()).toBe(1);
     vi.advanceTimersByTime(JOG_PERIOD_MS * 3);
     expect(t.sent.length).toBe(5);
     expect(t.sent.slice(1).every((m) => m.axis === 3)).toBe(true);
     t.hold.stop();
-    expect(t.sent.at(-1)).toEqual({ ...other, direction: 0 });
+    expect(t.plain().at(-1)).toEqual({ ...other, direction: 0 });
     expect(vi.getTimerCount()).toBe(0);
+  });
+
+  it('each press has its own number: its heartbeats and its release carry it, the next press a new one', () => {
+    const t = setup();
+    t.hold.start(msg);
+    vi.advanceTimersByTime(2 * JOG_PERIOD_MS);
+    t.hold.stop();
+    t.hold.start(msg);
+    t.hold.stop();
+    const [a, b] = [t.sent[0].press, t.sent[4].press];
+    expect(t.sent.map((m) => m.press)).toEqual([a, a, a, a, b, b]);
+    expect(Number.isInteger(a) && a > 0 && a <= 0xffffffff && b !== a).toBe(true);
+    // Another page (or a reload) starts elsewhere: it does not repeat the numbers a driver may still hold.
+    const other = setup();
+    other.hold.start(msg);
+    expect(other.sent[0].press).not.toBe(b);
   });
 
   it('ignores a start without a direction', () => {

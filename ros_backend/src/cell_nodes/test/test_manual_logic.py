@@ -160,6 +160,12 @@ def test_supervisor_heartbeat_timeout_with_a_fake_clock() -> None:
     clock.t += 0.02  # 0.21 s since the last heartbeat
     assert sup.expired()
     assert sup.clear() == jog() and not sup.expired() and sup.active is None
+    # stopped other than by its release: the same press stays stopped; a new press, or a release, ends that
+    assert sup.command(jog()) is Decision.HELD and sup.active is None
+    assert sup.command(jog(press=2)) is Decision.START
+    sup.clear()
+    assert sup.command(jog(direction=0)) is Decision.NOTHING
+    assert sup.command(jog(press=2)) is Decision.START
 
 
 def test_supervisor_stop_replace_never_queue() -> None:
@@ -612,10 +618,49 @@ def test_a_late_heartbeat_neither_restarts_nor_keeps_a_jog_alive(robot: FakeRobo
     for age in (0.6, 0.55, 0.5):  # the backlog arrives: nothing moves
         d.jog("arm", "joint", 0, 1, 0.5, "base", age)
     assert len(robot.moves("speedJ")) == 1 and d.state().motion == "idle"
-    d.jog("arm", "joint", 0, 1, 0.5, "base", None)  # unknown age (published on ROS directly): as before
+    d.jog("arm", "joint", 0, 1, 0.5, "base", None, press=2)  # unknown age (published on ROS directly): as before
     assert len(robot.moves("speedJ")) == 2
     d.jog("arm", "joint", 0, 0, 0.5, "base", 5.0)  # a release stops however late it comes
     assert len(robot.moves("speedStop")) == 2
+
+
+def test_a_jog_stopped_while_its_button_is_held_stays_stopped_until_a_new_press(robot: FakeRobot) -> None:
+    """CI: kill -9 of the BFF during a jog. The watchdog stopped the arm; then heartbeats held up in a stalled link,
+    fresh enough to pass the age check, started it again (0.25 rad/s after a standstill). And "Stop robot" must hold
+    while the holder's thumb stays on the button."""
+    clock = FakeClock()
+    d = make_driver(robot, clock=clock)
+    assert d.connect()
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=7)
+    clock.t += 0.25
+    assert d.check_heartbeat()
+    d.poll()
+    for _ in range(4):  # the same press's heartbeats go on (or arrive late from a stalled link): nothing moves
+        clock.t += 0.05
+        d.jog("arm", "joint", 0, 1, 0.5, "base", 0.05, press=7)
+        assert not d.check_heartbeat()
+    assert len(robot.moves("speedJ")) == 1
+    assert (d.state().motion, d.state().message) == ("idle", "jog stopped: no heartbeat for 0.2 s")
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=8)  # a new press moves
+    assert len(robot.moves("speedJ")) == 2 and d.state().motion == "jogging"
+    assert d.stop()[0]  # Stop robot, the thumb still down
+    d.poll()
+    clock.t += 0.05
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=8)
+    assert len(robot.moves("speedJ")) == 2 and d.state().motion == "idle"
+    d.jog("arm", "joint", 0, -1, 0.5, "base", 0.01, press=8)  # a different jog is a new command
+    assert len(robot.moves("speedJ")) == 3
+    # A publisher without press numbers (0): after a stop other than its release, only a release lets it move again.
+    d.jog("arm", "joint", 0, 1, 0.5, "base")
+    assert len(robot.moves("speedJ")) == 4
+    clock.t += 0.25
+    assert d.check_heartbeat()
+    d.poll()
+    d.jog("arm", "joint", 0, 1, 0.5, "base")
+    assert len(robot.moves("speedJ")) == 4
+    d.jog("arm", "joint", 0, 0, 0.5, "base")
+    d.jog("arm", "joint", 0, 1, 0.5, "base")
+    assert len(robot.moves("speedJ")) == 5
 
 
 def test_jog_release_replace_and_caps(robot: FakeRobot) -> None:
@@ -1147,7 +1192,8 @@ class FakeArm:
         self.stopped_at = time.monotonic()
         return self.stop_answer
 
-    def jog(self, group, mode, axis, direction, speed, frame="base", age_s=None): self.calls.append(("jog", group, direction))
+    def jog(self, group, mode, axis, direction, speed, frame="base", age_s=None, press=0):
+        self.calls.append(("jog", group, direction))
     def refuse_jog(self, why): self.calls.append(("refuse_jog", why))
 
 

@@ -555,10 +555,14 @@ export function notLiveBecause({ offline, conn, downSince }) {
  * it. The driver stops on its own ~200 ms after the last command, so a lost release is still safe.
  * Never queues: each tick sends the current command once; a publish that throws (not connected, refused)
  * ends the jog. Pressing another jog button replaces the running jog (the driver does the same).
+ * Each press carries its own number (`press`): a jog the driver stopped other than by its release (its
+ * watchdog, Stop robot) stays stopped while the same press goes on; only a new press moves the arm again.
+ * The numbers start at a random value, so a reloaded page never repeats one the driver still holds.
  */
 export class JogHold {
-  /** @type {JogMsg | null} */
+  /** @type {(JogMsg & { press: number }) | null} */
   #msg = null;
+  #press = 1 + Math.floor(Math.random() * 0x7fffffff);
   /** @type {any} */
   #timer = null;
 
@@ -596,7 +600,8 @@ export class JogHold {
       this.stop('not allowed');
       return false;
     }
-    this.#msg = msg;
+    this.#press = (this.#press % 0xffffffff) + 1; // uint32, never 0 (0: a publisher without press numbers)
+    this.#msg = { ...msg, press: this.#press };
     this.#clearTimer();
     if (!this.#send()) return false;
     this.#timer = this.setInterval(() => this.#tick(), this.periodMs);

@@ -45,7 +45,7 @@ class ArmDriver(Protocol):
     def tool_action(self, tool: str, action: str) -> tuple[bool, str]: ...
     def stop(self, wait: bool = True) -> tuple[bool, str]: ...
     def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base",
-            age_s: Optional[float] = None) -> None: ...
+            age_s: Optional[float] = None, press: int = 0) -> None: ...
     def refuse_jog(self, why: str) -> None: ...
 
 
@@ -186,12 +186,13 @@ class CellDriver:
 
     # ================================================================ jogging
     def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base",
-            age_s: Optional[float] = None) -> None:
-        """One JogCommand to its group's arm (age_s: how long ago the BFF let it through, None: unknown). A group no
-        arm has: refused on every arm (a release, direction 0, stops whatever jogs)."""
+            age_s: Optional[float] = None, press: int = 0) -> None:
+        """One JogCommand to its group's arm (age_s: how long ago the BFF let it through, None: unknown; press: the
+        page's number for this press). A group no arm has: refused on every arm (a release, direction 0, stops
+        whatever jogs)."""
         d = self.driver_of(group)
         if d is not None:
-            d.jog(group, mode, axis, direction, speed, frame, age_s)
+            d.jog(group, mode, axis, direction, speed, frame, age_s, press)
             return
         for d in self.drivers:
             if direction == 0:

@@ -904,12 +904,13 @@ class ManualDriver:
 
     # ================================================================ jogging
     def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base",
-            age_s: Optional[float] = None) -> None:
+            age_s: Optional[float] = None, press: int = 0) -> None:
         """One JogCommand. Never answers: what happened shows in the state's motion and message. age_s: how long
-        ago the BFF let it through (None: unknown, e.g. published on ROS directly)."""
-        cmd = Jog(group, mode, int(axis), int(max(-1, min(1, direction))), float(speed), frame or "base")
+        ago the BFF let it through (None: unknown, e.g. published on ROS directly); press: the page's number for
+        this press of the button (a jog stopped other than by its release stays stopped until a new one)."""
+        cmd = Jog(group, mode, int(axis), int(max(-1, min(1, direction))), float(speed), frame or "base", int(press))
         if cmd.direction == 0:
-            self._stop_jog("jog stopped")
+            self._stop_jog("jog stopped", release=True)
             return
         if age_s is not None and age_s > self._jog.timeout:
             # A late heartbeat (a stalled link or node delivering a backlog): it neither restarts motion the watchdog
@@ -933,6 +934,8 @@ class ManualDriver:
                 self._set_message(f"jog ignored: a move is running ({self._target})")
                 return
             self._check_robot()
+            if cmd.same_motion(self._jog.stopped):
+                return  # (held: see jog.py; the state still says why it stopped)
             if self._jog.active is None or not cmd.same_motion(self._jog.active):
                 self._control()  # may upload the control script: not while holding the command lock
         except Refused as e:
@@ -1000,9 +1003,9 @@ class ManualDriver:
                 self._levers.clear()
         return self._levers[key]
 
-    def _stop_jog(self, message: str, hard: bool = False) -> None:
+    def _stop_jog(self, message: str, hard: bool = False, release: bool = False) -> None:
         with self._cmd_lock:
-            jog = self._jog.clear()
+            jog = self._jog.clear(release)
             if jog is None and self._motion != JOGGING:
                 return
             sent, ctl = self._sent, self._ctl

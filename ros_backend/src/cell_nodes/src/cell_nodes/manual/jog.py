@@ -4,7 +4,11 @@ The page publishes the held jog every 50 ms and direction 0 on release. Rules (D
 - a jog runs only while its heartbeats keep coming: none for `timeout` (0.2 s) -> stop;
 - direction 0 -> stop now;
 - a different jog replaces the running one at once (the controller gets the new speed; nothing is queued);
-- the same jog again is only a heartbeat (no new command to the controller).
+- the same jog again is only a heartbeat (no new command to the controller);
+- a jog that was stopped other than by its release (the watchdog, a stop, a refusal, the controller) stays stopped
+  while its heartbeats go on: only a new press (its `press` number changes), a different jog, or the release and a
+  new press move the arm again. Why: heartbeats held up in a stalled link, arriving after the watchdog stopped the
+  arm, restarted it (CI: 0.25 rad/s after a standstill), and "Stop robot" must hold while a thumb stays down.
 The clock is injected so the timeout is tested without sleeping. Not thread-safe: the driver holds its lock.
 """
 from __future__ import annotations
@@ -28,6 +32,7 @@ class Jog:
     direction: int     # +1, -1; 0 = stop
     speed: float       # fraction (0, 1] of the manual maximum
     frame: str = "base"
+    press: int = 0     # the page's number for this press of the button (0: a publisher without one)
 
     def label(self) -> str:
         """What the state's motion_target says: "joint 2 +", "X -", "RZ + (tool)"."""
@@ -38,8 +43,8 @@ class Jog:
         return f"{name} {sign}" + (" (tool)" if self.frame == "tool" else "")
 
     def same_motion(self, other: Optional["Jog"]) -> bool:
-        return other is not None and (self.group, self.mode, self.axis, self.direction, self.frame) == \
-            (other.group, other.mode, other.axis, other.direction, other.frame) and \
+        return other is not None and (self.group, self.mode, self.axis, self.direction, self.frame, self.press) == \
+            (other.group, other.mode, other.axis, other.direction, other.frame, other.press) and \
             math.isclose(self.speed, other.speed, rel_tol=0, abs_tol=1e-9)
 
 
@@ -48,6 +53,7 @@ class Decision(enum.Enum):
     HEARTBEAT = "heartbeat"    # the running jog continues; nothing to send
     STOP = "stop"              # stop the running jog now
     NOTHING = "nothing"        # a stop with no jog running
+    HELD = "held"              # a heartbeat of a jog that was stopped: it stays stopped until a new press
 
 
 class JogSupervisor:
@@ -55,23 +61,31 @@ class JogSupervisor:
         self.timeout = timeout
         self.clock = clock
         self.active: Optional[Jog] = None
+        self.stopped: Optional[Jog] = None   # the jog stopped other than by its release: its heartbeats do nothing
         self.last_beat = 0.0
 
     def command(self, jog: Jog) -> Decision:
-        if jog.direction == 0:
-            return Decision.STOP if self.clear() is not None else Decision.NOTHING
+        if jog.direction == 0:  # released: the next press starts
+            return Decision.STOP if self.clear(release=True) is not None else Decision.NOTHING
         now = self.clock()
         if jog.same_motion(self.active):
             self.last_beat = now
             return Decision.HEARTBEAT
-        self.active, self.last_beat = jog, now
+        if jog.same_motion(self.stopped):
+            return Decision.HELD
+        self.active, self.stopped, self.last_beat = jog, None, now
         return Decision.START
 
     def expired(self) -> bool:
         """True when the running jog missed its heartbeats for longer than the timeout."""
         return self.active is not None and self.clock() - self.last_beat > self.timeout
 
-    def clear(self) -> Optional[Jog]:
-        """Forget the running jog (the caller stops the arm); returns it, or None if none ran."""
+    def clear(self, release: bool = False) -> Optional[Jog]:
+        """Forget the running jog (the caller stops the arm); returns it, or None if none ran. Unless it was released,
+        its further heartbeats are held (see the module's rules)."""
         jog, self.active = self.active, None
+        if release:
+            self.stopped = None
+        elif jog is not None:
+            self.stopped = jog
         return jog
