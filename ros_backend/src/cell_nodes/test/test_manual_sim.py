@@ -345,8 +345,8 @@ def ur_children(host: str) -> list[int]:
 def test_a_controller_silent_mid_move_is_a_lost_connection_never_a_crash() -> None:
     """CI: the node died with SIGSEGV when the sim's data paused mid-move. ur_rtde closes a stream silent for 2.5 s,
     its control client reconnects on its own thread, and that raced the driver's call. Its clients now live in a
-    child process per connection: the move fails, the driver reconnects, and one child is left (the old control
-    client no longer fights the new one for the controller)."""
+    child process each: the move fails, the driver reconnects, and the lost connection's children are gone (the old
+    control client no longer fights the new one for the controller)."""
     sim = start_sim(FREEZE_HOST, "--no-ros", "--no-cameras")
     driver = make_driver(FREEZE_HOST)
     try:
@@ -361,7 +361,8 @@ def test_a_controller_silent_mid_move_is_a_lost_connection_never_a_crash() -> No
             move.join(20)
             assert result == [(False, f"robot controller at {FREEZE_HOST} is unreachable")]
             wait_for(lambda: driver.state().connected, 20, interval=0.02, what="reconnected")
-            wait_for(lambda: len(ur_children(FREEZE_HOST)) == 1, 10, what="one ur_rtde child left")
+            # The lost connection's children are gone: the new connection's receive and IO clients are left.
+            wait_for(lambda: len(ur_children(FREEZE_HOST)) == 2, 10, what="two ur_rtde children left")
         ok, why = driver.move_named("arm", "home", 1.0, 1.5)
         assert (ok, why) == (True, "arrived at home")
     finally:
