@@ -865,6 +865,23 @@ def test_a_lost_controller_is_never_disconnected_under_a_call_still_inside_it(ro
     assert robot.controls == 2
 
 
+def test_a_control_client_whose_process_died_is_replaced_on_the_next_move(robot: FakeRobot, driver: ManualDriver) -> None:
+    assert driver.move_named("arm", "home")[0]
+    dead = driver._ctl
+    FakeControl.isConnected, saved = _dead, FakeControl.isConnected  # (ur_process: its child ended, e.g. a crash)
+    try:
+        assert driver.move_named("arm", "pick_approach") == (True, "arrived at pick_approach")
+    finally:
+        FakeControl.isConnected = saved
+    assert robot.controls == 2 and driver._ctl is not dead and driver.connected
+
+
+def _dead(self: FakeControl) -> bool:
+    if self.r.controls < 2:  # the first client's process is gone; the new one answers
+        raise RuntimeError("the ur_rtde control process for 10.0.0.5 ended (exit code -11)")
+    return True
+
+
 def test_groups_service_content(driver: ManualDriver) -> None:
     groups, tools, limits = driver.groups()
     assert [g.name for g in groups] == ["arm"] and tools == [("gripper", ["open", "close", "check_part"])]

@@ -233,10 +233,6 @@ class Guarded:
                 self._lock.release()
         return call
 
-    @property
-    def dropped(self) -> bool:
-        return self._dropped
-
     def drop(self, stop_script: bool = False) -> None:
         """Disconnect, once no call is inside the client; later calls raise ClientGone. A client that can end a call
         inside it at once (kill: the child process of ur_process) does so instead of waiting for it."""

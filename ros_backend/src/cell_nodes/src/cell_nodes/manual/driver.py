@@ -306,9 +306,14 @@ class ManualDriver:
         starting the control script would end that program (the connector's `control_takes_over`)."""
         with self._connect_lock:
             ctl = self._ctl
-            if ctl is not None and not self._call(ctl.isConnected):
-                self._dispose_later((ctl,))
-                self._ctl = ctl = None
+            if ctl is not None:
+                try:
+                    alive = self._call(ctl.isConnected)
+                except Refused:  # e.g. its process died (ur_process): the receive side may be fine, make a new one
+                    alive = False
+                if not alive:
+                    self._dispose_later((ctl,))
+                    self._ctl = ctl = None
             if ctl is None:
                 if not self._connected:
                     raise Refused(self._unreachable())
