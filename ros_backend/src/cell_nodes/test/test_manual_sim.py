@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -326,6 +327,11 @@ def test_reconnects_after_the_controller_restarts() -> None:
         sim.stop()
 
 
+# Freeze a process (SIGSTOP) for some seconds, then let it go on, as a controller whose data pauses.
+FREEZE = ("import os, signal, sys, time; p = int(sys.argv[1]); os.kill(p, signal.SIGSTOP); "
+          "time.sleep(float(sys.argv[2])); os.kill(p, signal.SIGCONT)")
+
+
 def ur_children(host: str) -> list[int]:
     """The pids of this process's ur_rtde children (ur_process) for a controller, alive."""
     found = []
@@ -356,8 +362,7 @@ def test_a_controller_silent_mid_move_is_a_lost_connection_never_a_crash() -> No
             move.start()
             wait_for(lambda: driver.state().motion != "idle", 10, interval=0.01, what="the move started")
             # Frozen by a helper process: a ur_rtde call that blocks may hold this process's GIL.
-            subprocess.run(["sh", "-c", f"kill -STOP {sim.proc.pid}; sleep 3; kill -CONT {sim.proc.pid}"], check=True,
-                           timeout=10)
+            subprocess.run([sys.executable, "-c", FREEZE, str(sim.proc.pid), "3"], check=True, timeout=10)
             move.join(20)
             assert result == [(False, f"robot controller at {FREEZE_HOST} is unreachable")]
             wait_for(lambda: driver.state().connected, 20, interval=0.02, what="reconnected")
