@@ -37,6 +37,8 @@ def _methods(protocol: type) -> frozenset[str]:
 # getMoveError, so hasattr says no), and readState for the receive client.
 METHODS = {"receive": _methods(ReceiveInterface) | {"readState"}, "io": _methods(IOInterface),
            "control": _methods(ControlInterface)}
+RTDE_PORT = 30004       # the controller's RTDE interface (every ur_rtde client talks to it)
+PROBE_TIMEOUT_S = 1.0
 CALL_TIMEOUT_S = 12.0   # a call that takes longer ends the child (the gate gives up on it sooner: see Gate)
 # The child's start and its client's connection, on a loaded host. Under the driver's own bound for making a client
 # (5 s, ManualDriver.connect): a client the driver gave up on has ended its child by then, so none is left behind.
@@ -155,6 +157,12 @@ class UrRtdeConnector:
     control_takes_over = True   # RTDEControlInterface uploads its script: another running program ends
 
     def receive(self, host: str) -> Client:
+        # A connection starts here: while the controller does not answer, fail without starting a child (the driver
+        # retries every second; a Python process each time would cost a good part of a core).
+        try:
+            socket.create_connection((host, RTDE_PORT), timeout=PROBE_TIMEOUT_S).close()
+        except OSError as e:
+            raise RuntimeError(f"RTDE at {host}:{RTDE_PORT}: {e.strerror or e}") from None
         return Client(host, "receive")
 
     def io(self, host: str) -> Client:
