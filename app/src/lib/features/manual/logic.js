@@ -555,8 +555,8 @@ export function notLiveBecause({ offline, conn, downSince }) {
  * it. The driver stops on its own ~200 ms after the last command, so a lost release is still safe.
  * Never queues: each tick sends the current command once; a publish that throws (not connected, refused)
  * ends the jog. Pressing another jog button replaces the running jog (the driver does the same).
- * Each press carries its own number (`press`): a jog the driver stopped other than by its release (its
- * watchdog, Stop robot) stays stopped while the same press goes on; only a new press moves the arm again.
+ * Each press carries its own number (`press`): a jog the driver stopped (Stop robot, a take-over, the
+ * controller) stays stopped while the same press goes on; only a new press moves the arm again.
  * The numbers start at a random value, so a reloaded page never repeats one the driver still holds.
  */
 export class JogHold {

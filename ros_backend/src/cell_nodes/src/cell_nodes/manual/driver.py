@@ -912,10 +912,11 @@ class ManualDriver:
             age_s: Optional[float] = None, press: int = 0) -> None:
         """One JogCommand. Never answers: what happened shows in the state's motion and message. age_s: how long
         ago the BFF let it through (None: unknown, e.g. published on ROS directly); press: the page's number for
-        this press of the button (a jog stopped other than by its release stays stopped until a new one)."""
+        this press of the button (a jog stopped by a stop, a refusal or the controller stays stopped until a new
+        one: jog.py)."""
         cmd = Jog(group, mode, int(axis), int(max(-1, min(1, direction))), float(speed), frame or "base", int(press))
         if cmd.direction == 0:
-            self._stop_jog("jog stopped", release=True)
+            self._stop_jog("jog stopped", released=True)
             return
         if age_s is not None and age_s > self._jog.timeout:
             # A late heartbeat (a stalled link or node delivering a backlog): it neither restarts motion the watchdog
@@ -955,7 +956,7 @@ class ManualDriver:
             try:
                 self._start_jog(cmd, g)
             except Refused as e:
-                self._jog.clear()
+                self._jog.clear(hold=False)  # it never moved: the press's next heartbeat tries again
                 self._set_idle(f"jog refused: {e}")
         self.on_change()
 
@@ -1008,9 +1009,9 @@ class ManualDriver:
                 self._levers.clear()
         return self._levers[key]
 
-    def _stop_jog(self, message: str, hard: bool = False, release: bool = False) -> None:
+    def _stop_jog(self, message: str, hard: bool = False, hold: bool = True, released: bool = False) -> None:
         with self._cmd_lock:
-            jog = self._jog.clear(release)
+            jog = self._jog.clear(hold, released)
             if jog is None and self._motion != JOGGING:
                 return
             sent, ctl = self._sent, self._ctl
@@ -1029,5 +1030,5 @@ class ManualDriver:
         with self._cmd_lock:  # re-entrant: a heartbeat cannot slip in between the check and the stop
             if not self._jog.expired():
                 return False
-            self._stop_jog(f"jog stopped: no heartbeat for {self.limits.jog_timeout:g} s", hard=True)
+            self._stop_jog(f"jog stopped: no heartbeat for {self.limits.jog_timeout:g} s", hard=True, hold=False)
         return True

@@ -5,10 +5,12 @@ The page publishes the held jog every 50 ms and direction 0 on release. Rules (D
 - direction 0 -> stop now;
 - a different jog replaces the running one at once (the controller gets the new speed; nothing is queued);
 - the same jog again is only a heartbeat (no new command to the controller);
-- a jog that was stopped other than by its release (the watchdog, a stop, a refusal, the controller) stays stopped
-  while its heartbeats go on: only a new press (its `press` number changes), a different jog, or the release and a
-  new press move the arm again. Why: heartbeats held up in a stalled link, arriving after the watchdog stopped the
-  arm, restarted it (CI: 0.25 rad/s after a standstill), and "Stop robot" must hold while a thumb stays down.
+- a running jog stopped by a stop (the stop service: Stop robot, Stop move, a take-over), a refused command, or
+  the controller (lost, or stopping the arm itself) stays stopped while its heartbeats go on: only a new press (its
+  `press` number changes), a different jog, or the release and a new press move the arm again. Why: "Stop robot"
+  from another session did not hold while the holder's thumb stayed down (the next heartbeat restarted the arm).
+  The heartbeat timeout does not hold the press: on a live link that stalled for a moment the jog goes on once
+  heartbeats come again (the driver drops late ones by their stamp); holding it there failed the loaded e2e host.
 The clock is injected so the timeout is tested without sleeping. Not thread-safe: the driver holds its lock.
 """
 from __future__ import annotations
@@ -61,31 +63,36 @@ class JogSupervisor:
         self.timeout = timeout
         self.clock = clock
         self.active: Optional[Jog] = None
-        self.stopped: Optional[Jog] = None   # the jog stopped other than by its release: its heartbeats do nothing
+        self.stopped: Optional[Jog] = None   # a jog held stopped (see the rules): its heartbeats do nothing
+        self.pressed: Optional[Jog] = None   # the last jog started and not released (held by a stop even when the
+                                             # heartbeat timeout had already stopped it)
         self.last_beat = 0.0
 
     def command(self, jog: Jog) -> Decision:
         if jog.direction == 0:  # released: the next press starts
-            return Decision.STOP if self.clear(release=True) is not None else Decision.NOTHING
+            return Decision.STOP if self.clear(released=True) is not None else Decision.NOTHING
         now = self.clock()
         if jog.same_motion(self.active):
             self.last_beat = now
             return Decision.HEARTBEAT
         if jog.same_motion(self.stopped):
             return Decision.HELD
-        self.active, self.stopped, self.last_beat = jog, None, now
+        self.active, self.pressed, self.stopped, self.last_beat = jog, jog, None, now
         return Decision.START
 
     def expired(self) -> bool:
         """True when the running jog missed its heartbeats for longer than the timeout."""
         return self.active is not None and self.clock() - self.last_beat > self.timeout
 
-    def clear(self, release: bool = False) -> Optional[Jog]:
-        """Forget the running jog (the caller stops the arm); returns it, or None if none ran. Unless it was released,
-        its further heartbeats are held (see the module's rules)."""
+    def clear(self, hold: bool = True, released: bool = False) -> Optional[Jog]:
+        """Forget the running jog (the caller stops the arm); returns it, or None if none ran. hold: its press's
+        further heartbeats are held (see the module's rules), also when the heartbeat timeout had already stopped it;
+        hold=False (the heartbeat timeout, a start the controller refused) holds nothing; released: the press ended."""
         jog, self.active = self.active, None
-        if release:
+        if released:
+            self.stopped = self.pressed = None
+        elif not hold:
             self.stopped = None
-        elif jog is not None:
-            self.stopped = jog
+        else:
+            self.stopped = jog or self.pressed
         return jog
