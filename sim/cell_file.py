@@ -46,6 +46,7 @@ RESERVED_TOPICS = ("/sim/faults", "/sim/objects")
 # What rospy accepts as a global name (rosgraph.names.is_legal_name, anchored): a bad one must not
 # surface as a ValueError from rospy.Publisher deep inside the bridge.
 _TOPIC = re.compile(r"/[A-Za-z][\w/]*", re.ASCII)
+_FRAME = re.compile(r"[A-Za-z_][\w/]*", re.ASCII)   # a TF frame id (tf2: no leading slash)
 
 
 class CellFileError(Exception):
@@ -65,6 +66,7 @@ class SceneArm:
     group: str
     robot_description: Optional[str] = None          # parameter name; None: the view takes the driver's own
     base: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)   # x, y, z (m), yaw (deg): where the view puts it
+    base_frame: Optional[str] = None                 # its base's TF frame (the view places it from TF instead)
 
 
 @dataclass(frozen=True)
@@ -80,6 +82,7 @@ class ArmDescription:
 @dataclass(frozen=True)
 class SceneSpec:
     markers: Optional[str] = None                    # visualization_msgs/MarkerArray topic (None: not published)
+    fixed_frame: Optional[str] = None                # the TF frame the view draws in (None: the view reads no TF)
     arms: tuple[SceneArm, ...] = ()
     descriptions: tuple[ArmDescription, ...] = ()    # UR sim only: the parameters to set (a ros_control driver sets
     #                                                  its own, manual.groups[].ros_control.robot_description)
@@ -246,6 +249,9 @@ def parse_scene(doc: dict, world: WorldSpec, path: str = "<cell file>") -> Scene
     markers = section.get("markers")
     if markers is not None:
         markers = ros_name(markers, "scene.markers", "/sim/parts")
+    fixed_frame = section.get("fixed_frame")
+    if fixed_frame is not None and (not isinstance(fixed_frame, str) or not _FRAME.fullmatch(fixed_frame)):
+        raise bad("scene.fixed_frame", f"expected a TF frame name like world, got {fixed_frame!r}")
     manual = doc.get("manual")
     groups = {g.get("name"): g for g in (manual.get("groups") or []) if isinstance(g, dict)} \
         if isinstance(manual, dict) and isinstance(manual.get("groups"), list) else {}
@@ -274,7 +280,13 @@ def parse_scene(doc: dict, world: WorldSpec, path: str = "<cell file>") -> Scene
         if (not isinstance(base, list) or len(base) != 4
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in base)):
             raise bad(f"{where}.base", f"expected [x, y, z, yaw_deg], got {base!r}")
-        arms.append(SceneArm(group, param, tuple(float(v) for v in base)))  # type: ignore[arg-type]
+        base_frame = entry.get("base_frame")
+        if base_frame is not None:
+            if not isinstance(base_frame, str) or not _FRAME.fullmatch(base_frame):
+                raise bad(f"{where}.base_frame", f"expected a TF frame name like left_base_link, got {base_frame!r}")
+            if fixed_frame is None:
+                raise bad(f"{where}.base_frame", "needs scene.fixed_frame (the frame TF places the base in)")
+        arms.append(SceneArm(group, param, tuple(float(v) for v in base), base_frame))  # type: ignore[arg-type]
 
     descriptions: list[ArmDescription] = []
     warnings: list[str] = []
@@ -293,7 +305,7 @@ def parse_scene(doc: dict, world: WorldSpec, path: str = "<cell file>") -> Scene
         yaw_deg = math.degrees(sim_arm.yaw)
         bx, by, bz, byaw = arm.base
         turn = (byaw - yaw_deg + 180.0) % 360.0 - 180.0
-        if max(abs(bx - x), abs(by - y), abs(bz - z)) > 1e-6 or abs(turn) > 1e-6:
+        if arm.base_frame is None and (max(abs(bx - x), abs(by - y), abs(bz - z)) > 1e-6 or abs(turn) > 1e-6):
             warnings.append(f"{where}.base: {list(arm.base)} but the simulated arm stands at "
                             f"[{x:g}, {y:g}, {z:g}, {yaw_deg:g}] (simulation.arms): the 3D view would show it elsewhere")
         if arm.group in ros_control:
@@ -315,7 +327,8 @@ def parse_scene(doc: dict, world: WorldSpec, path: str = "<cell file>") -> Scene
             warnings.append(f"{gwhere}: {e}: nothing sets {arm.robot_description}")
             continue
         descriptions.append(ArmDescription(arm.robot_description, arm.group, sim_arm.tool.kind, tuple(names)))
-    return SceneSpec(markers=markers, arms=tuple(arms), descriptions=tuple(descriptions), warnings=tuple(warnings))
+    return SceneSpec(markers=markers, fixed_frame=fixed_frame, arms=tuple(arms), descriptions=tuple(descriptions),
+                     warnings=tuple(warnings))
 
 
 # ---------------------------------------------------------------------------------------------- simulation section

@@ -13,7 +13,8 @@ The 3D view (the cell file's `scene:` section, sim/cell_file.py parse_scene): on
 visualization_msgs/MarkerArray of the parts and stations (sim/markers.py, frame `world`) with every /sim/objects
 message; at start, for each simulated UR arm whose `scene.arms[]` entry names a `robot_description`, that parameter
 set to the arm's URDF (sim/urdf.py) under its motion group's joint names, as the UR bringup would on a real cell
-(the ros_control sim's driver sets its arm's own parameter: sim/ros_control/driver.py).
+(the ros_control sim's driver sets its arm's own parameter: sim/ros_control/driver.py); with `scene.fixed_frame`,
+latched on /tf_static the transform from that frame to each simulated arm's `scene.arms[].base_frame` (sim/frames.py).
 No /joint_states: the arm is a UR controller, which speaks RTDE, not ROS; the cell's robot driver
 (cell_nodes manual_node) reads it over RTDE and is the only source of /joint_states, as with a real robot.
 """
@@ -21,9 +22,11 @@ from __future__ import annotations
 
 import logging
 import threading
+from types import SimpleNamespace
 from typing import Optional
 
 from .cell_file import CellDevices, Stream
+from .frames import TF_STATIC, base_frames, tf_message
 from .markers import marker_array, part_boxes
 from .pacing import Pacer
 from .safety import Fault
@@ -112,6 +115,22 @@ class RosBridge:
                 self.pub_markers = rospy.Publisher(devices.scene.markers, MarkerArray, queue_size=2)
                 self._station_boxes = station_boxes(cell.world.spec)
                 self._part_size = cell.world.parts_spec.size
+        # Where each arm's base stands, for a view that places the arms from TF (scene.fixed_frame, base_frame).
+        self.pub_tf_static = None
+        frames = base_frames(devices.scene, cell.world.spec)
+        if frames:
+            try:
+                from geometry_msgs.msg import TransformStamped
+                from tf2_msgs.msg import TFMessage
+            except ImportError as e:
+                log.error("scene.fixed_frame %s: tf2_msgs not importable (%s): run scripts/bootstrap.sh apt",
+                          devices.scene.fixed_frame, e)
+            else:
+                self.pub_tf_static = rospy.Publisher(TF_STATIC, TFMessage, queue_size=1, latch=True)
+                self.pub_tf_static.publish(tf_message(frames, rospy.Time.now(), SimpleNamespace(
+                    TFMessage=TFMessage, TransformStamped=TransformStamped)))
+                for f in frames:
+                    log.info("TF %s -> %s at %s on %s", f.parent, f.child, list(f.translation), TF_STATIC)
         self._types = dict(AlarmList=AlarmList, Scatter=Scatter, WrenchStamped=WrenchStamped,
                            CompressedImage=CompressedImage, Pose=Pose, PoseArray=PoseArray)
         self.service = rospy.Service("/sim/trigger_fault", TriggerFault, self._trigger_fault)

@@ -33,3 +33,20 @@ test('the 3D view shows both arms, each drawn at its own joint states, and the p
   await expect(view.getByTestId('scene-objects')).toHaveText(new RegExp(`^\\d+ objects from ${cell.scene.markers}$`));
   await expect(view.getByRole('alert')).toHaveCount(0);
 });
+
+test('each arm stands where TF puts its base frame: where the simulated cell built it', async ({ page }) => {
+  expect(cell.scene.fixed_frame).toBeTruthy();
+  await loginAs(page, 'operator');
+  await page.goto('/scene');
+  const view = page.getByTestId('scene-view');
+  for (const arm of cell.scene.arms) {
+    const sim = cell.simulation.arms.find((/** @type {any} */ a) => a.group === arm.group);
+    const base = view.locator(`[data-testid="scene-base"][data-group="${arm.group}"]`);
+    await expect(base).toHaveText(new RegExp(`base from TF, ${arm.base_frame} in ${cell.scene.fixed_frame} at x ${sim.base[0].toFixed(3)}, `));
+    const p = String(await base.getAttribute('data-position')).split(',').map(Number);
+    const q = String(await base.getAttribute('data-quaternion')).split(',').map(Number);
+    p.forEach((v, i) => expect(Math.abs(v - sim.base[i])).toBeLessThan(0.001));
+    const yaw = (Math.atan2(2 * q[3] * q[2], 1 - 2 * q[2] * q[2]) * 180) / Math.PI;
+    expect(Math.abs((((yaw - sim.base[3]) % 360) + 540) % 360 - 180)).toBeLessThan(0.1);
+  }
+});

@@ -8,15 +8,19 @@ import math
 import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from types import SimpleNamespace
 
 import pybullet
 import pytest
 import yaml
 from pybullet_utils import bullet_client
+from geometry_msgs.msg import TransformStamped
+from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker
 
 from sim import urdf
 from sim.cell_file import ArmDescription, CellFileError, SceneSpec, devices_from, load_devices
+from sim.frames import base_frames, tf_message
 from sim.markers import marker_array, part_boxes
 from sim.ros_bridge import OBJECTS_RATE, robot_descriptions
 from sim.scene import PART_COLORS, PartsSpec, StationSpec, WorldSpec
@@ -184,6 +188,25 @@ def test_warnings_where_the_view_would_disagree_with_the_sim() -> None:
     assert any("group 'right' is no simulated arm" in w for w in d.scene.warnings)
 
 
+def test_tf_places_each_simulated_arm_where_the_sim_built_it() -> None:
+    scene = {"markers": "/sim/parts", "fixed_frame": "world",
+             "arms": [{"group": "left", "robot_description": "/left/robot_description", "base_frame": "left_base_link"},
+                      {"group": "right", "robot_description": "/right/robot_description"}]}
+    d = devices_from(doc_with_scene(TWIN, scene), str(TWIN))
+    # the left base comes from TF: no base to disagree with; the right one has the default base, 0.48 m off
+    assert [w.split(":")[0] for w in d.scene.warnings] == ["scene.arms[1].base"]
+    [left] = base_frames(d.scene, d.world)
+    assert (left.parent, left.child) == ("world", "left_base_link")
+    assert left.translation == pytest.approx((-0.48, 0.0, 0.0))
+    assert left.rotation == pytest.approx((0.0, 0.0, 1.0, 0.0))   # turned 180 degrees about z
+    msg = tf_message([left], stamp=7, types=SimpleNamespace(TFMessage=TFMessage, TransformStamped=TransformStamped))
+    [t] = msg.transforms
+    assert (t.header.frame_id, t.child_frame_id, t.header.stamp) == ("world", "left_base_link", 7)
+    assert (t.transform.translation.x, t.transform.rotation.z, t.transform.rotation.w) == pytest.approx((-0.48, 1.0, 0.0))
+    # no fixed frame: no TF at all
+    assert base_frames(devices_from(doc_with_scene(TWIN, TWIN_SCENE), str(TWIN)).scene, d.world) == []
+
+
 @pytest.mark.parametrize("scene, where", [
     (["/sim/parts"], "scene: expected a mapping"),
     ({"markers": "sim/parts"}, "scene.markers: expected a global ROS name"),
@@ -200,6 +223,9 @@ def test_warnings_where_the_view_would_disagree_with_the_sim() -> None:
      "scene.arms[1].robot_description: /d is already the parameter of group 'left'"),
     ({"arms": [{"group": "left", "base": [0, 0, 0]}]}, "scene.arms[0].base: expected [x, y, z, yaw_deg]"),
     ({"arms": [{"group": "left", "base": [0, 0, 0, "90"]}]}, "scene.arms[0].base"),
+    ({"fixed_frame": "/world", "arms": [{"group": "left"}]}, "scene.fixed_frame: expected a TF frame name"),
+    ({"arms": [{"group": "left", "base_frame": "left_base"}]}, "scene.arms[0].base_frame: needs scene.fixed_frame"),
+    ({"fixed_frame": "world", "arms": [{"group": "left", "base_frame": "a b"}]}, "scene.arms[0].base_frame: expected"),
 ])
 def test_unusable_scene_sections_name_the_field(scene, where: str) -> None:
     with pytest.raises(CellFileError) as e:

@@ -69,6 +69,8 @@ test('the section is validated; each problem names its field', () => {
     [{ markers: 'parts', arms: [{ group: 'arm', robot_description: '/rd' }] }, 'scene.markers: must match pattern "^/[A-Za-z0-9_/~]*$"'],
     [{ stale_after_s: 0, arms: [{ group: 'arm', robot_description: '/rd' }] }, 'scene.stale_after_s: must be > 0'],
     [{ arms: [{ group: 'arm', robot_description: '/rd' }], camera: {} }, 'scene: unknown field "camera"'],
+    [{ fixed_frame: '/world', arms: [{ group: 'arm', robot_description: '/rd' }] }, 'scene.fixed_frame: must match pattern "^[A-Za-z_][A-Za-z0-9_/]*$"'],
+    [{ fixed_frame: 'world', arms: [{ group: 'arm', robot_description: '/rd', base_frame: 'base link' }] }, 'scene.arms[0].base_frame: must match pattern "^[A-Za-z_][A-Za-z0-9_/]*$"'],
   ];
   for (const [section, expected] of cases) assert.deepEqual(problems(cellWith(section)), [expected], JSON.stringify(section));
 });
@@ -89,6 +91,10 @@ test('cross-references: manual groups, one URDF source, a group once, an existin
     ['scene.arms[2].group: "arm" is already drawn by scene.arms[0] (one entry per group)']);
   assert.deepEqual(p({ arms: [{ group: 'arm', urdf: '/nonexistent/scene/arm.urdf' }] }), ['scene.arms[0].urdf: no such file: /nonexistent/scene/arm.urdf']);
   assert.deepEqual(p({ arms: [{ group: 'arm', urdf: path.join(FIXTURES, 'two_link.urdf') }] }), []);
+  // A base from TF needs the frame TF places it in, and is not also given by hand.
+  assert.deepEqual(p({ arms: [{ group: 'iiwa', base_frame: 'iiwa_link_0' }] }), ['scene.arms[0].base_frame: needs scene.fixed_frame (the frame TF places the base in)']);
+  assert.deepEqual(p({ fixed_frame: 'world', arms: [{ group: 'iiwa', base_frame: 'iiwa_link_0', base: [0, 0, 0, 0] }] }), ['scene.arms[0]: give base or base_frame, not both']);
+  assert.deepEqual(p({ fixed_frame: 'world', arms: [{ group: 'iiwa', base_frame: 'iiwa_link_0' }] }), []);
   // The page needs its section, as every feature with a schema.
   assert.deepEqual(problems(cellWith(undefined)), ['pages[2]: page "scene" needs the "scene" section']);
 });
@@ -108,7 +114,8 @@ test('view and reads of a UR cell like the demo: /joint_states, the markers, the
   assert.deepEqual(scene.view(cell.scene, 'admin', cell), {
     markers: '/sim/parts',
     stale_after_s: 1,
-    arms: [{ group: 'arm', joints: UR, joint_states: '/joint_states', base: [0, 0, 0, 0], urdf_url: '/api/scene/arms/arm/urdf' }],
+    fixed_frame: null,
+    arms: [{ group: 'arm', joints: UR, joint_states: '/joint_states', base: [0, 0, 0, 0], base_frame: null, urdf_url: '/api/scene/arms/arm/urdf' }],
   });
   assert.deepEqual(scene.reads(cell.scene, cell), { subscribe: ['/joint_states', '/sim/parts'] });
   assert.equal(scene.commands, undefined, 'the view commands nothing');
@@ -126,7 +133,8 @@ test('view and reads of a ros_control cell: the group\'s joint states topic, no 
   assert.deepEqual(scene.view(cell.scene, 'admin', cell), {
     markers: null,
     stale_after_s: 2.5,
-    arms: [{ group: 'arm', joints: IIWA, joint_states: '/iiwa/joint_states', base: [0.1, -0.2, 0.75, 90], urdf_url: '/api/scene/arms/arm/urdf' }],
+    fixed_frame: null,
+    arms: [{ group: 'arm', joints: IIWA, joint_states: '/iiwa/joint_states', base: [0.1, -0.2, 0.75, 90], base_frame: null, urdf_url: '/api/scene/arms/arm/urdf' }],
   });
   assert.deepEqual(scene.reads(cell.scene, cell), { subscribe: ['/iiwa/joint_states'] });
   // An explicit joint_states wins over the group's.
@@ -137,6 +145,18 @@ test('view and reads of a ros_control cell: the group\'s joint states topic, no 
   assert.ok(g.subscribe.includes('/iiwa/joint_states'));
   assert.ok(!grantsFor({ ...cell, roles: { other: { pages: ['home'] } } }, FEATURES, 'other').subscribe.includes('/iiwa/joint_states'));
   assert.equal(configFor(cell, FEATURES, 'operator').features.scene, undefined, 'the operator does not see the page');
+});
+
+test('with a fixed frame the view reads TF: /tf and /tf_static are granted, each arm says its base frame', () => {
+  const cell = validateCell(cellWith({ fixed_frame: 'world', markers: '/sim/parts', arms: [{ group: 'left', robot_description: '/l', base_frame: 'left_base_link' }, { group: 'right', robot_description: '/r', base: [0.48, 0, 0, 0] }] },
+    [urGroup('left'), urGroup('right')]), 'c.yaml', FEATURES);
+  const view = scene.view(cell.scene, 'admin', cell);
+  assert.equal(view.fixed_frame, 'world');
+  assert.deepEqual(view.arms.map((a) => [a.group, a.base_frame, a.base]), [['left', 'left_base_link', [0, 0, 0, 0]], ['right', null, [0.48, 0, 0, 0]]]);
+  assert.deepEqual(scene.reads(cell.scene, cell), { subscribe: ['/joint_states', '/sim/parts', '/tf', '/tf_static'] });
+  const g = grantsFor(cell, FEATURES, 'admin');
+  assert.ok(g.subscribe.includes('/tf') && g.subscribe.includes('/tf_static'));
+  assert.ok(!grantsFor(cell, FEATURES, 'operator').subscribe.includes('/tf_static'), 'not for a role without the page');
 });
 
 test('mesh helpers: content types and base names', () => {
@@ -279,7 +299,7 @@ test('GET /api/config gives the view to a role that sees the page', async () => 
   assert.equal(c.pages[2].title, '3D view');
   assert.equal(c.features.scene.markers, '/sim/parts');
   assert.deepEqual(c.features.scene.arms.find((a) => a.group === 'param'),
-    { group: 'param', joints: urGroup('param').joints, joint_states: '/param/joint_states', base: [0, 0, 0, 0], urdf_url: '/api/scene/arms/param/urdf' });
+    { group: 'param', joints: urGroup('param').joints, joint_states: '/param/joint_states', base: [0, 0, 0, 0], base_frame: null, urdf_url: '/api/scene/arms/param/urdf' });
   assert.equal(c.features.scene.arms.find((a) => a.group === 'iiwa').joint_states, '/iiwa/joint_states');
   assert.ok(!JSON.stringify(c.features.scene).includes(dir), 'no server path in the view');
   const op = await (await get('/api/config', { cookie: operator })).json();

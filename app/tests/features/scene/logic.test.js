@@ -2,8 +2,18 @@ import { describe, it, expect } from 'vitest';
 import URDFLoader from 'urdf-loader';
 import {
   sceneSection, pickJoints, parseUrdf, urdfJoints, missingJoints, mimicValues, staleness, staleText, applyMarkers,
-  presetPose, formatJoint, routinePath,
+  presetPose, formatJoint, routinePath, placeShapes, armBase,
 } from '../../../src/lib/features/scene/logic.js';
+import { TfTree, baseToPose, compose, invert, rotate, yawDeg } from '../../../src/lib/features/scene/tf.js';
+
+/** A geometry_msgs/TransformStamped. @param {string} parent @param {string} child @param {number[]} p @param {number[]} [q] */
+const tfs = (parent, child, p, q = [0, 0, 0, 1]) => ({
+  header: { frame_id: parent }, child_frame_id: child,
+  transform: { translation: { x: p[0], y: p[1], z: p[2] }, rotation: { x: q[0], y: q[1], z: q[2], w: q[3] } },
+});
+const YAW90 = [0, 0, Math.SQRT1_2, Math.SQRT1_2];
+/** @param {number[]} a @param {number[]} b */
+const near = (a, b) => a.forEach((v, i) => expect(v).toBeCloseTo(b[i], 9));
 
 // A two-joint arm with a two-finger gripper whose right finger mimics the left one (as a gripper URDF does).
 const URDF = `<?xml version="1.0"?>
@@ -21,9 +31,13 @@ describe('scene logic', () => {
   it('takes the scene section as the server gives it, with defaults for what is missing', () => {
     const s = sceneSection({ arms: [{ group: 'arm', joints: ['j1'], urdf_url: '/api/scene/arms/arm/urdf' }, { group: 'x' }] });
     expect(s).toEqual({
-      markers: null, stale_after_s: 1,
-      arms: [{ group: 'arm', joints: ['j1'], joint_states: '/joint_states', base: [0, 0, 0, 0], urdf_url: '/api/scene/arms/arm/urdf' }],
+      markers: null, fixed_frame: null, stale_after_s: 1,
+      arms: [{ group: 'arm', joints: ['j1'], joint_states: '/joint_states', base: [0, 0, 0, 0], base_frame: null, urdf_url: '/api/scene/arms/arm/urdf' }],
     });
+    // a base frame counts only with a fixed frame to place it in
+    const tf = sceneSection({ fixed_frame: 'world', arms: [{ group: 'arm', base_frame: 'arm_base', urdf_url: '/u' }] });
+    expect([tf.fixed_frame, tf.arms[0].base_frame]).toEqual(['world', 'arm_base']);
+    expect(sceneSection({ arms: [{ group: 'arm', base_frame: 'arm_base', urdf_url: '/u' }] }).arms[0].base_frame).toBeNull();
     expect(sceneSection(undefined).arms).toEqual([]);
     expect(sceneSection({ markers: '/sim/parts', stale_after_s: 3, arms: [] }).markers).toBe('/sim/parts');
   });
@@ -81,7 +95,7 @@ describe('scene logic', () => {
     const cube = (/** @type {number} */ id, /** @type {number} */ x) => ({ ns: 'parts', id, type: 1, action: 0, pose: { position: { x, y: 0, z: 0.025 }, orientation: { x: 0, y: 0, z: 0, w: 1 } }, scale: { x: 0.05, y: 0.05, z: 0.05 }, color: { r: 1, g: 0, b: 0, a: 1 } });
     expect(applyMarkers(shapes, { markers: [cube(0, 0.1), cube(1, 0.2), { ns: 'x', id: 0, type: 9, action: 0 }] })).toEqual({ skipped: 1 });
     expect([...shapes.keys()]).toEqual(['parts/0', 'parts/1']);
-    expect(shapes.get('parts/0')).toEqual({ key: 'parts/0', shape: 'cube', position: [0.1, 0, 0.025], quaternion: [0, 0, 0, 1], scale: [0.05, 0.05, 0.05], color: [1, 0, 0, 1] });
+    expect(shapes.get('parts/0')).toEqual({ key: 'parts/0', shape: 'cube', frame: '', position: [0.1, 0, 0.025], quaternion: [0, 0, 0, 1], scale: [0.05, 0.05, 0.05], color: [1, 0, 0, 1] });
     applyMarkers(shapes, { markers: [cube(0, 0.3), { ns: 'parts', id: 1, action: 2 }] });
     expect(shapes.get('parts/0')?.position[0]).toBe(0.3);
     expect(shapes.has('parts/1')).toBe(false);
@@ -91,6 +105,70 @@ describe('scene logic', () => {
     expect([...shapes.keys()]).toEqual(['stations/5']);
     applyMarkers(shapes, { markers: [{ action: 3 }] });
     expect(shapes.size).toBe(0);
+  });
+
+  it('TF: chains of frames composed, looked up from any frame to any other of the same tree', () => {
+    const tree = new TfTree();
+    // world -> left_base (0.5 m along x, turned 90 degrees) -> tool (0.1 m along its x); world -> camera
+    expect(tree.apply({ transforms: [tfs('world', 'left_base', [0.5, 0, 0], YAW90), tfs('/left_base', 'tool', [0.1, 0, 0]), tfs('world', 'camera', [0, 0, 2])] })).toBe(3);
+    const tool = tree.lookup('world', 'tool');
+    near(tool?.p ?? [], [0.5, 0.1, 0]); // the base's x is the world's y
+    near(tool?.q ?? [], YAW90);
+    // from a sibling branch: the tool seen from the camera
+    near(tree.lookup('camera', 'tool')?.p ?? [], [0.5, 0.1, -2]);
+    near(tree.lookup('tool', 'world')?.p ?? [], invert(tool ?? { p: [], q: [] }).p);
+    expect(tree.lookup('world', 'world')).toEqual({ p: [0, 0, 0], q: [0, 0, 0, 1] });
+    expect(tree.lookup('world', 'nowhere')).toBeNull();
+    tree.apply({ transforms: [tfs('map', 'odom', [1, 0, 0])] });
+    expect(tree.lookup('world', 'odom')).toBeNull(); // another tree: not linked
+    // the same transform again changes nothing; a newer one moves the frame
+    expect(tree.apply({ transforms: [tfs('world', 'camera', [0, 0, 2])] })).toBe(0);
+    expect(tree.apply({ transforms: [tfs('world', 'camera', [0, 0, 3])] })).toBe(1);
+    near(tree.lookup('camera', 'tool')?.p ?? [], [0.5, 0.1, -3]);
+  });
+
+  it('TF: what is not a transform, or would close a loop, is skipped; quaternions are normalised', () => {
+    const tree = new TfTree();
+    expect(tree.apply({ transforms: [tfs('a', 'b', [1, 0, 0]), tfs('b', 'a', [1, 0, 0]), tfs('b', 'b', [0, 0, 0]),
+      tfs('a', 'c', [NaN, 0, 0]), tfs('a', 'd', [0, 0, 0], [0, 0, 0, 0]), tfs('', 'e', [0, 0, 0]), null] })).toBe(1);
+    expect(tree.apply(undefined)).toBe(0);
+    expect([...tree.frames.keys()]).toEqual(['b']);
+    tree.apply({ transforms: [tfs('a', 'f', [0, 0, 0], [0, 0, 2, 2])] });
+    near(tree.lookup('a', 'f')?.q ?? [], YAW90);
+  });
+
+  it('pose helpers: a base [x, y, z, yaw deg] as a pose, compose and invert undo each other', () => {
+    near(baseToPose([-0.48, 0, 0, 180]).q, [0, 0, 1, 0]);
+    expect(yawDeg(baseToPose([0, 0, 0, -135]).q)).toBeCloseTo(-135, 9);
+    expect(yawDeg(compose({ p: [0, 0, 0], q: YAW90 }, { p: [0, 0, 0], q: [Math.SQRT1_2, 0, 0, Math.SQRT1_2] }).q)).toBeCloseTo(90, 9); // a roll keeps the heading
+    near(rotate(baseToPose([0, 0, 0, 90]).q, [1, 0, 0]), [0, 1, 0]);
+    const a = { p: [0.3, -0.2, 0.1], q: YAW90 };
+    const id = compose(a, invert(a));
+    near(id.p, [0, 0, 0]);
+    near(id.q, [0, 0, 0, 1]);
+  });
+
+  it('with a fixed frame, markers in other frames are drawn where TF puts them; unknown frames left out and counted', () => {
+    const tree = new TfTree();
+    tree.apply({ transforms: [tfs('world', 'table', [1, 2, 0.7], YAW90)] });
+    const shape = (/** @type {string} */ frame, /** @type {string} */ key) => ({ key, shape: /** @type {const} */ ('cube'), frame, position: [0.1, 0, 0], quaternion: [0, 0, 0, 1], scale: [1, 1, 1], color: [1, 1, 1, 1] });
+    const list = [shape('world', 'a'), shape('', 'b'), shape('table', 'c'), shape('camera', 'd'), shape('camera', 'e')];
+    const placed = placeShapes(list, 'world', tree);
+    expect(placed.shapes.map((s) => s.key)).toEqual(['a', 'b', 'c']);
+    near(placed.shapes[2].position, [1, 2.1, 0.7]);
+    near(placed.shapes[2].quaternion, YAW90);
+    expect(placed.unplaced).toEqual({ camera: 2 });
+    // no fixed frame: no TF, drawn as given
+    expect(placeShapes(list, null, tree)).toEqual({ shapes: list, unplaced: {} });
+  });
+
+  it('an arm\'s base: from TF when it names a base frame (none until TF has it), else the cell file\'s', () => {
+    const tree = new TfTree();
+    const arm = { group: 'left', joints: [], joint_states: '/joint_states', base: [0, 0, 0, 0], base_frame: 'left_base_link', urdf_url: '/u' };
+    expect(armBase(arm, 'world', tree)).toBeNull();
+    tree.apply({ transforms: [tfs('world', 'left_base_link', [-0.48, 0, 0], [0, 0, 1, 0])] });
+    near(armBase(arm, 'world', tree)?.p ?? [], [-0.48, 0, 0]);
+    near(armBase({ ...arm, base_frame: null, base: [0.48, 0, 0, 90] }, 'world', tree)?.q ?? [], YAW90);
   });
 
   it('camera presets look at the centre from the front, the side and the top, far enough to see it all', () => {

@@ -22,6 +22,7 @@ export const DEFAULT_JOINT_STATES = '/joint_states';
  * @property {string[]} joints the group's joints
  * @property {string} joint_states
  * @property {[number, number, number, number]} base x, y, z (m), yaw (deg)
+ * @property {string | null} base_frame the TF frame that places the base instead (needs scene.fixed_frame)
  * @property {UrdfSource | null} source null: none given and the group has none (check reports it)
  */
 
@@ -50,6 +51,7 @@ export function armSpec(arm, i, cell) {
     joints: Array.isArray(g?.joints) ? [...g.joints] : [],
     joint_states: arm.joint_states ?? rc?.joint_states ?? DEFAULT_JOINT_STATES,
     base: /** @type {[number, number, number, number]} */ ([...base]),
+    base_frame: typeof arm.base_frame === 'string' ? arm.base_frame : null,
     source,
   };
 }
@@ -94,6 +96,8 @@ export function checkScene(section, cell) {
     }
     if (seen.has(arm.group)) problems.push(`${where}.group: "${arm.group}" is already drawn by scene.arms[${seen.get(arm.group)}] (one entry per group)`);
     else seen.set(arm.group, i);
+    if (arm.base_frame !== undefined && section?.fixed_frame === undefined) problems.push(`${where}.base_frame: needs scene.fixed_frame (the frame TF places the base in)`);
+    if (arm.base_frame !== undefined && arm.base !== undefined) problems.push(`${where}: give base or base_frame, not both`);
     if (arm.robot_description !== undefined && arm.urdf !== undefined) {
       problems.push(`${where}: give robot_description or urdf, not both`);
       return;

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from typing import Any, List
 
 import cbor2
@@ -162,6 +164,31 @@ def test_shared_subscriber_and_release(ros_node: str, ctx: BridgeContext) -> Non
     b.send({"op": "unsubscribe", "topic": "/proto_shared"})
     assert ctx.hub.count() == 0
     pub.unregister()
+
+
+def test_a_late_subscriber_gets_the_latched_message_of_every_publisher(ros_node: str, ctx: BridgeContext) -> None:
+    # /tf_static is the case: several nodes latch their own frames on one topic, and ROS gives a new subscriber all.
+    script = ("import sys, rospy, std_msgs.msg as m; rospy.init_node('proto_other_latcher');"
+              "p = rospy.Publisher('/proto_two_latched', m.String, queue_size=1, latch=True);"
+              "p.publish(m.String(data='from the other node')); sys.stdin.read()")
+    other = subprocess.Popen([sys.executable, "-c", script], stdin=subprocess.PIPE)
+    try:
+        pub = rospy.Publisher("/proto_two_latched", std.String, queue_size=1, latch=True)
+        pub.publish(std.String(data="from this node"))
+        first = Harness(ctx)
+        first.send({"op": "subscribe", "topic": "/proto_two_latched", "type": "std_msgs/String"})
+        both = {"from this node", "from the other node"}
+        wait_for(lambda: {m["msg"]["data"] for m in first.drain() if m.get("op") == "publish"} == both, 15,
+                 what="both latched messages to the first subscriber")
+        late = Harness(ctx)  # joins the shared subscription: the bridge replays what it has
+        late.send({"op": "subscribe", "topic": "/proto_two_latched", "type": "std_msgs/String"})
+        assert {m["msg"]["data"] for m in late.drain() if m.get("op") == "publish"} == both
+        first.client.finish()
+        late.client.finish()
+        pub.unregister()
+    finally:
+        other.kill()
+        other.wait()
 
 
 def test_publish_fills_defaults_with_warning_and_finish_releases_publisher(ros_node: str, h: Harness,

@@ -4,13 +4,16 @@
  * The cell frame is ROS's: x forward, y left, z up (the view keeps it; its camera's up is +z).
  */
 
+import { TfTree, baseToPose, compose, frameId } from './tf.js';
+
 export const JOINT_STATE_TYPE = 'sensor_msgs/JointState';
 export const MARKERS_TYPE = 'visualization_msgs/MarkerArray';
 
 /**
  * One arm of the view, as GET /api/config gives it (bff/src/features/scene).
- * @typedef {{ group: string, joints: string[], joint_states: string, base: number[], urdf_url: string }} SceneArm
- * @typedef {{ markers: string | null, stale_after_s: number, arms: SceneArm[] }} SceneSection
+ * @typedef {{ group: string, joints: string[], joint_states: string, base: number[], base_frame: string | null, urdf_url: string }} SceneArm
+ * @typedef {{ markers: string | null, fixed_frame: string | null, stale_after_s: number, arms: SceneArm[] }} SceneSection
+ * fixed_frame: the TF frame the view draws in (null: no TF); base_frame: the TF frame that places the arm's base
  */
 
 /**
@@ -22,6 +25,7 @@ export function sceneSection(section) {
   const arms = Array.isArray(section?.arms) ? section.arms : [];
   return {
     markers: typeof section?.markers === 'string' && section.markers ? section.markers : null,
+    fixed_frame: typeof section?.fixed_frame === 'string' && section.fixed_frame ? section.fixed_frame : null,
     stale_after_s: Number(section?.stale_after_s) > 0 ? Number(section.stale_after_s) : 1,
     arms: arms
       .filter((/** @type {any} */ a) => a && typeof a.group === 'string' && typeof a.urdf_url === 'string')
@@ -30,6 +34,7 @@ export function sceneSection(section) {
         joints: Array.isArray(a.joints) ? a.joints.map(String) : [],
         joint_states: typeof a.joint_states === 'string' ? a.joint_states : '/joint_states',
         base: [0, 1, 2, 3].map((i) => (Number.isFinite(Number(a.base?.[i])) ? Number(a.base[i]) : 0)),
+        base_frame: typeof a.base_frame === 'string' && a.base_frame && typeof section?.fixed_frame === 'string' ? a.base_frame : null,
         urdf_url: a.urdf_url,
       })),
   };
@@ -147,7 +152,8 @@ const SHAPES = { [MARKER.CUBE]: 'cube', [MARKER.SPHERE]: 'sphere', [MARKER.CYLIN
 
 /**
  * @typedef {{ key: string, shape: 'cube' | 'sphere' | 'cylinder', position: number[], quaternion: number[],
- *   scale: number[], color: number[] }} Shape  quaternion x, y, z, w; color r, g, b, a in 0..1
+ *   scale: number[], color: number[], frame: string }} Shape  quaternion x, y, z, w; color r, g, b, a in 0..1;
+ *   frame: its header's frame_id (its pose is in that frame)
  */
 
 /**
@@ -183,7 +189,7 @@ export function applyMarkers(shapes, msg) {
     const quat = [n(q.x, 0), n(q.y, 0), n(q.z, 0), n(q.w, 1)];
     if (!quat.some((v) => v !== 0)) quat[3] = 1; // an all-zero quaternion (common in hand-made markers) means none
     shapes.set(key, {
-      key, shape,
+      key, shape, frame: frameId(m.header?.frame_id),
       position: [n(p.x, 0), n(p.y, 0), n(p.z, 0)],
       quaternion: quat,
       scale: [n(s.x, 0.01), n(s.y, 0.01), n(s.z, 0.01)],
@@ -191,6 +197,45 @@ export function applyMarkers(shapes, msg) {
     });
   }
   return { skipped };
+}
+
+/**
+ * The shapes as the view draws them, in its fixed frame: without one (no TF) as given; with one, each shape in another
+ * frame moved to where TF puts that frame, and those in a frame TF does not link to the fixed one left out (as RViz
+ * does), counted by frame.
+ * @param {Iterable<Shape>} shapes @param {string | null} fixed @param {TfTree} tree
+ * @returns {{ shapes: Shape[], unplaced: Record<string, number> }}
+ */
+export function placeShapes(shapes, fixed, tree) {
+  /** @type {Shape[]} */
+  const out = [];
+  /** @type {Record<string, number>} */
+  const unplaced = {};
+  for (const s of shapes) {
+    if (!fixed || !s.frame || s.frame === frameId(fixed)) {
+      out.push(s);
+      continue;
+    }
+    const at = tree.lookup(fixed, s.frame);
+    if (!at) {
+      unplaced[s.frame] = (unplaced[s.frame] ?? 0) + 1;
+      continue;
+    }
+    const pose = compose(at, { p: s.position, q: s.quaternion });
+    out.push({ ...s, position: pose.p, quaternion: pose.q });
+  }
+  return { shapes: out, unplaced };
+}
+
+/**
+ * Where an arm's base stands in the view: from TF when it names a base frame (null until TF links it to the fixed
+ * frame), else its base from the cell file.
+ * @param {SceneArm} arm @param {string | null} fixed @param {TfTree} tree
+ * @returns {import('./tf.js').Pose | null}
+ */
+export function armBase(arm, fixed, tree) {
+  if (fixed && arm.base_frame) return tree.lookup(fixed, arm.base_frame);
+  return baseToPose(arm.base);
 }
 
 /** Named camera views. */

@@ -39,6 +39,16 @@ function matteAll(root) {
   return root;
 }
 
+/** @typedef {import('./tf.js').Pose} Pose */
+
+/** Put an object at a pose of the view's frame, or hide it (null). @param {THREE.Object3D} obj @param {Pose | null} pose */
+function place(obj, pose) {
+  obj.visible = !!pose;
+  if (!pose) return;
+  obj.position.fromArray(pose.p);
+  obj.quaternion.fromArray(pose.q);
+}
+
 /** Whether this browser can draw WebGL at all. */
 export function webglAvailable() {
   try {
@@ -90,7 +100,7 @@ export class SceneViewer {
     this.arms = new Map();
     /** @type {Map<string, THREE.Mesh>} */
     this.shapes = new Map();
-    /** @type {Map<string, { text: string, base: number[] }>} */
+    /** @type {Map<string, { text: string, pose: Pose | null }>} where each arm's base is drawn */
     this.urdfs = new Map();
     /** @type {Map<string, any>} the target ghost of each arm, when there is one */
     this.ghosts = new Map();
@@ -163,19 +173,43 @@ export class SceneViewer {
   }
 
   /**
-   * Add an arm from its URDF text, its base placed at base = [x, y, z, yaw deg] in the cell frame.
-   * @param {string} group @param {string} urdf @param {number[]} base
+   * Add an arm from its URDF text, its base placed at `pose` in the view's frame (null: not known yet, e.g. TF has
+   * not said; the arm is hidden until setBase places it).
+   * @param {string} group @param {string} urdf @param {Pose | null} pose
    * @returns {any} the URDF robot (its joints by name)
    */
-  addArm(group, urdf, base) {
+  addArm(group, urdf, pose) {
     const robot = this.#load(group, urdf);
-    robot.position.set(base[0], base[1], base[2]);
-    robot.rotation.set(0, 0, (base[3] * Math.PI) / 180);
+    place(robot, pose);
     this.scene.add(robot);
     this.arms.set(group, { robot, stale: false, originals: new Map() });
-    this.urdfs.set(group, { text: urdf, base });
+    this.urdfs.set(group, { text: urdf, pose });
     this.frameAll();
     return robot;
+  }
+
+  /**
+   * Move an arm's base (TF moved it, or first placed it; null: hide it), with its ghost and path.
+   * @param {string} group @param {Pose | null} pose
+   */
+  setBase(group, pose) {
+    const src = this.urdfs.get(group);
+    const arm = this.arms.get(group);
+    if (!src || !arm) return;
+    const was = src.pose;
+    if (was && pose && [...was.p, ...was.q].every((v, i) => Math.abs(v - [...pose.p, ...pose.q][i]) < MIN_CHANGE)) return;
+    src.pose = pose;
+    place(arm.robot, pose);
+    const ghost = this.ghosts.get(group);
+    if (ghost) place(ghost, pose);
+    if (this.path && this.path.userData.group === group) place(this.path, pose);
+    if (!was) this.frameAll();
+    this.invalidate();
+  }
+
+  /** Where an arm's base is drawn (null: not placed). @param {string} group @returns {Pose | null} */
+  basePose(group) {
+    return this.urdfs.get(group)?.pose ?? null;
   }
 
   /** @param {string} group @param {string} urdf */
@@ -249,8 +283,7 @@ export class SceneViewer {
     if (!src) return;
     if (!ghost) {
       ghost = this.#load(group, src.text);
-      ghost.position.set(src.base[0], src.base[1], src.base[2]);
-      ghost.rotation.set(0, 0, (src.base[3] * Math.PI) / 180);
+      place(ghost, src.pose);
       // Meshes load later: each one that arrives is made see-through as well.
       const glassy = (/** @type {any} */ o) => {
         if (!o.isMesh || o.userData.ghost) return;
@@ -280,8 +313,8 @@ export class SceneViewer {
     const src = group ? this.urdfs.get(group) : null;
     if (src && points.length) {
       const path = new THREE.Group();
-      path.position.set(src.base[0], src.base[1], src.base[2]);
-      path.rotation.set(0, 0, (src.base[3] * Math.PI) / 180);
+      path.userData.group = group;
+      place(path, src.pose);
       const vs = points.map((p) => new THREE.Vector3(p[0], p[1], p[2]));
       path.add(new THREE.Line(new THREE.BufferGeometry().setFromPoints(vs), new THREE.LineBasicMaterial({ color: PATH_COLOR })));
       for (const v of vs) {
@@ -384,7 +417,7 @@ export class SceneViewer {
   /** The sphere around everything the cell shows (arms and shapes). */
   bounds() {
     const box = new THREE.Box3();
-    for (const a of this.arms.values()) box.expandByObject(a.robot);
+    for (const a of this.arms.values()) if (a.robot.visible) box.expandByObject(a.robot);
     for (const m of this.shapes.values()) box.expandByObject(m);
     if (box.isEmpty()) box.set(new THREE.Vector3(-0.5, -0.5, 0), new THREE.Vector3(0.5, 0.5, 0.8));
     const sphere = box.getBoundingSphere(new THREE.Sphere());

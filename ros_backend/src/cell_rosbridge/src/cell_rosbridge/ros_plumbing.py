@@ -133,8 +133,9 @@ class SharedSubscriber:
     def __init__(self, topic: str, type_name: str, msg_cls: type) -> None:
         self.topic, self.type_name, self.msg_cls = topic, type_name, msg_cls
         self.listeners: Dict[Hashable, Listener] = {}
-        self.last: Optional[SharedMessage] = None
-        self.last_latched = False
+        # The last message of each latching publisher (by caller id): a topic such as /tf_static has several,
+        # and ROS hands a new subscriber every one of them.
+        self.latched: Dict[str, SharedMessage] = {}
         self._lock = threading.Lock()
         # Bounded: if conversion ever falls behind a flood, rospy drops the oldest instead of growing.
         self.sub = rospy.Subscriber(topic, msg_cls, self._callback, queue_size=100, tcp_nodelay=True)
@@ -142,9 +143,12 @@ class SharedSubscriber:
     def _callback(self, msg: Any) -> None:
         shared = SharedMessage(self.topic, msg)
         header = getattr(msg, "_connection_header", None) or {}
+        caller = str(header.get("callerid", ""))
         with self._lock:
-            self.last = shared
-            self.last_latched = header.get("latching") == "1"
+            if header.get("latching") == "1":
+                self.latched[caller] = shared
+            else:
+                self.latched.pop(caller, None)
             listeners = list(self.listeners.values())
         for listener in listeners:
             try:
@@ -155,11 +159,11 @@ class SharedSubscriber:
     def add(self, key: Hashable, listener: Listener) -> None:
         with self._lock:
             self.listeners[key] = listener
-            replay = self.last if self.last_latched else None
+            replay = list(self.latched.values())
         # rospy delivers a latched message once per connection; a client joining an existing
         # subscription would otherwise never see it (e.g. the cell's operation mode).
-        if replay is not None:
-            listener(replay)
+        for shared in replay:
+            listener(shared)
 
 
 class TopicHub:
@@ -205,13 +209,13 @@ class TopicHub:
                 del self._subs[topic]
                 shared.sub.unregister()
 
-    def latched(self, topic: str) -> Optional[SharedMessage]:
-        """The last message of a topic if it came from a latching publisher."""
+    def latched(self, topic: str) -> List[SharedMessage]:
+        """The last message of each latching publisher of a topic."""
         shared = self._subs.get(topic)
         if shared is None:
-            return None
+            return []
         with shared._lock:
-            return shared.last if shared.last_latched else None
+            return list(shared.latched.values())
 
     def type_of(self, topic: str) -> Optional[str]:
         shared = self._subs.get(topic)

@@ -83,8 +83,7 @@ def subscribe(client: Any, msg: Dict[str, Any]) -> None:
         sub.update()
     # A second subscription of the same client (another component, or another browser behind a
     # relay) must see the latched state too; duplicates are harmless for latched data.
-    last = hub.latched(topic)
-    if last is not None:
+    for last in hub.latched(topic):
         sub.on_message(last)
 
 
