@@ -12,6 +12,7 @@ import routines from './routines/index.js';
 import alarms from './alarms/index.js';
 import database from './database/index.js';
 import system from './system/index.js';
+import recorder from './recorder/index.js';
 
 /** @type {import('../core/features/feature.js').Feature[]} */
-export const FEATURES = [home, modules, process, manual, scene, sensors, video, parameters, routines, alarms, database, system];
+export const FEATURES = [home, modules, process, manual, scene, sensors, video, parameters, routines, alarms, database, system, recorder];

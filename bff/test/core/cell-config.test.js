@@ -16,7 +16,7 @@ const demo = () => yaml.load(fs.readFileSync(DEMO, 'utf8'));
 test('the demo cell file is valid and has a section for every feature', () => {
   const cell = loadCell(DEMO, FEATURES);
   for (const f of FEATURES) if (f.schema) assert.ok(cell[f.id], `section ${f.id}`);
-  assert.equal(FEATURES.filter((f) => f.schema).length, 10);
+  assert.equal(FEATURES.filter((f) => f.schema).length, 11);
 });
 
 const broken = [

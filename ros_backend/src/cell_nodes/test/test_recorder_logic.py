@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any, List
 
 import pytest
+import yaml
 from mcap.reader import make_reader
 from mcap_ros1.decoder import DecoderFactory
 from sensor_msgs.msg import JointState
@@ -16,10 +17,13 @@ from std_msgs.msg import String
 
 from cell_msgs.msg import Alarm, AlarmList
 from cell_nodes.recorder import mcap_file, retention
+from cell_nodes.recorder.config import RecorderConfigError, parse_recorder
+from cell_nodes.recorder.core import Recorder, RecorderConfig
 from cell_nodes.recorder.mcap_file import write_mcap
 from cell_nodes.recorder.ring import OVERHEAD_BYTES, RawMessage, Ring, Schema
 
 S = 1_000_000_000
+ROOT = Path(__file__).resolve().parents[4]
 
 
 def raw(topic: str, msg: Any, t_ns: int) -> RawMessage:
@@ -155,3 +159,105 @@ def test_retention_deletes_the_oldest_past_the_count_or_the_bytes_never_the_newe
     assert retention.prune(str(tmp_path), max_count=10, max_bytes=250) == ["r4.mcap", "r5.mcap"]
     assert [r.name for r in retention.recordings(str(tmp_path))] == ["big.mcap"]
     assert retention.prune(str(tmp_path / "none"), 1, 1) == [] and retention.recordings(str(tmp_path / "none")) == []
+
+
+# ---------------------------------------------------------------------------------------------- recorder
+def recorder(tmp_path: Path, **kw: Any) -> Recorder:
+    cfg = RecorderConfig(directory=str(tmp_path / "recordings"), before_s=10, after_s=5, **kw)
+    return Recorder(cfg, clock_ns=lambda: 0)
+
+
+def joints(rec: Recorder, seconds: range) -> None:
+    for t in seconds:                                            # one joint state a second
+        rec.add(raw("/joint_states", JointState(name=["j"], position=[float(t)]), t * S))
+
+
+def test_a_new_error_alarm_saves_the_seconds_before_it_and_after_it(tmp_path: Path) -> None:
+    rec = recorder(tmp_path)
+    joints(rec, range(0, 100))
+    assert rec.alarms([("robot.protective_stop", Alarm.WARNING, "slow down")], 100 * S) is None   # below error
+    p = rec.alarms([("robot.protective_stop", Alarm.ERROR, "Protective stop")], 100 * S)
+    assert p is not None and p.reason == "alarm robot.protective_stop: Protective stop"
+    joints(rec, range(100, 108))                                 # the save runs late: 2 s past its end
+    assert rec.save_due(104 * S) is None                         # its 5 s after are not over yet
+    saved = rec.save_due(107 * S)
+    assert saved is not None and saved.name == "19700101T000140.000Z-alarm-robot-protective-stop-protective-stop.mcap"
+    assert (saved.start_ns, saved.end_ns, saved.messages) == (90 * S, 105 * S, 16)
+    with open(saved.path, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        positions = [m.position[0] for _, _, _, m in reader.iter_decoded_messages()]
+    assert positions == [float(t) for t in range(90, 106)]       # 10 s before the alarm to 5 s after
+    assert rec.save_due(200 * S) is None                         # written once
+
+
+def test_an_alarm_still_active_does_not_record_again_others_join_the_waiting_recording(tmp_path: Path) -> None:
+    rec = recorder(tmp_path)
+    a = ("device.gripper", Alarm.ERROR, "gripper does not close")
+    b = ("force.limit", Alarm.ERROR, "force over the limit")
+    assert rec.alarms([a], 10 * S) is not None
+    assert rec.alarms([a, b], 12 * S) is None                    # joins: one recording, both alarms in it
+    assert rec.pending is not None and rec.pending.alarms == ["device.gripper", "force.limit"]
+    assert rec.save_due(15 * S) is not None
+    assert rec.alarms([a, b], 20 * S) is None                    # still the same alarms: nothing new
+    assert rec.alarms([b], 21 * S) is None                       # one cleared
+    assert rec.alarms([a, b], 22 * S) is not None                # and back: a new recording
+    # by hand, with no alarm
+    rec2 = recorder(tmp_path / "2")
+    assert rec2.request("saved by engineer", 50 * S).reason == "saved by engineer"
+    assert rec2.save_due(55 * S).name.endswith("-saved-by-engineer.mcap")
+
+
+def test_recordings_beyond_the_count_are_deleted_oldest_first(tmp_path: Path) -> None:
+    rec = recorder(tmp_path, max_count=2)
+    names = []
+    for i in range(3):
+        rec.request(f"save {i}", (100 + 10 * i) * S)
+        saved = rec.save_due((105 + 10 * i) * S)
+        names.append(saved.name)
+        os.utime(saved.path, (1000 + i, 1000 + i))              # file times in save order, whatever the clock
+    assert saved.deleted == (names[0],)                          # the third save made room
+    assert [r.name for r in retention.recordings(rec.config.directory)] == names[1:]
+
+
+# ---------------------------------------------------------------------------------------------- the cell file
+def cell(name: str) -> dict:
+    return yaml.safe_load((ROOT / "config" / name).read_text())
+
+
+def test_the_default_topics_come_from_the_rest_of_the_cell_file() -> None:
+    demo = parse_recorder(cell("demo-cell.yaml"), {"DATA_DIR": "/srv/cell"})
+    assert demo.topics == ["/joint_states", "/cell/manual/arm/state", "/cell/process/state", "/cell/process/log",
+                           "/cell/alarms/list", "/cell/mode", "/cell/wrench", "/rosout_agg"]
+    assert demo.config.directory == "/srv/cell/recordings"
+    assert (demo.config.before_s, demo.config.after_s, demo.config.max_bytes, demo.config.max_count,
+            demo.config.min_severity) == (120, 10, 64 * 2**20, 20, Alarm.ERROR)
+    iiwa = cell("iiwa-cell.yaml")
+    iiwa["recorder"] = {}
+    [group] = iiwa["manual"]["groups"]
+    assert parse_recorder(iiwa, {"DATA_DIR": "/d"}).topics[0] == group["ros_control"]["joint_states"]
+    twin = cell("twin-arm-cell.yaml")
+    twin["recorder"] = {"topics": ["/joint_states"], "severity": "warning", "directory": "/var/rec"}
+    t = parse_recorder(twin, {})
+    assert t.topics == ["/joint_states", "/cell/alarms/list"]        # the alarm list always: it says why
+    assert (t.config.min_severity, t.config.directory) == (Alarm.WARNING, "/var/rec")
+
+
+@pytest.mark.parametrize("section, message", [
+    ("yes", "recorder: expected a mapping"),
+    ({"before_s": 0}, "recorder.before_s: expected a number from 1 to 3600, got 0"),
+    ({"after_s": True}, "recorder.after_s: expected a number"),
+    ({"memory_mb": float("nan")}, "recorder.memory_mb"),
+    ({"severity": "fatal"}, "recorder.severity: expected one of warning, error, got 'fatal'"),
+    ({"topics": ["joint_states"]}, "recorder.topics: expected a list of global ROS names"),
+])
+def test_a_section_the_node_cannot_use_names_the_field(section: Any, message: str) -> None:
+    doc = cell("demo-cell.yaml")
+    doc["recorder"] = section
+    with pytest.raises(RecorderConfigError) as e:
+        parse_recorder(doc, {"DATA_DIR": "/d"})
+    assert str(e.value).startswith(message), str(e.value)
+
+
+def test_without_data_dir_or_directory_there_is_nowhere_to_record() -> None:
+    with pytest.raises(RecorderConfigError, match="set DATA_DIR"):
+        parse_recorder(cell("demo-cell.yaml"), {})
