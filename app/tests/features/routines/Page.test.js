@@ -97,6 +97,32 @@ describe('Routines page with two motion groups', () => {
   });
 });
 
+describe('recording order', () => {
+  it('steps are in the order they were asked for, whichever answer comes first; each as it was when pressed', async () => {
+    await open({ groups: ['arm'], tools: ['gripper'], tool_groups: { gripper: 'arm' } });
+    const record = () => f.calls.filter((c) => c.name === '/cell/routines/record');
+    await fireEvent.click(screen.getByRole('button', { name: 'Add pose' }));
+    await fireEvent.change(screen.getByRole('combobox', { name: 'Tool action' }), { target: { value: 'close' } });
+    await fireEvent.click(screen.getByRole('button', { name: 'Add action' }));
+    await fireEvent.change(screen.getByRole('combobox', { name: 'Tool action' }), { target: { value: 'open' } });
+    await flush();
+    // The action waits for the pose: asking both at once would let the faster answer go first.
+    expect(record().map((c) => c.args.kind)).toEqual(['pose']);
+    record()[0].ok({ success: true, step: { kind: 'pose', pose: [0.1, 0.2, 0.3, 0, 0, 0], joints: [] } });
+    await vi.waitFor(() => expect(record().length).toBe(2));
+    expect(record()[1].args).toEqual({ group: 'arm', tool: 'gripper', kind: 'action', action: 'close' });
+    record()[1].ok({ success: true, step: { kind: 'action', tool: 'gripper', action: 'close' } });
+    await vi.waitFor(() => expect(screen.getAllByRole('listitem').length).toBe(2));
+    expect(screen.getAllByRole('listitem').map((li) => li.textContent?.match(/Pose|Gripper close/)?.[0])).toEqual(['Pose', 'Gripper close']);
+    // A refused recording does not hold up the next one.
+    await fireEvent.click(screen.getByRole('button', { name: 'Add pose' }));
+    await vi.waitFor(() => expect(record().length).toBe(3));
+    record()[2].fail('no pose: the driver is not connected');
+    await fireEvent.click(screen.getByRole('button', { name: 'Add action' }));
+    await vi.waitFor(() => expect(record().length).toBe(4));
+  });
+});
+
 describe('the draft belongs to the user who recorded it', () => {
   /** Record one pose for `right` and name the draft. */
   async function recordOne() {
