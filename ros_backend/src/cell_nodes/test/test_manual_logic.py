@@ -168,6 +168,23 @@ def test_supervisor_heartbeat_timeout_with_a_fake_clock() -> None:
     assert sup.command(jog(press=2)) is Decision.START
 
 
+def test_a_heartbeat_that_comes_after_its_press_was_released_does_not_start_the_arm() -> None:
+    # CI: Stop robot from another session, the holder's release and a delayed heartbeat of that press: the heartbeat
+    # after the release started the arm again for a moment (0.12 rad/s).
+    sup = JogSupervisor(0.2, FakeClock())
+    assert sup.command(jog(press=7)) is Decision.START
+    assert sup.command(jog(press=7, direction=0)) is Decision.STOP
+    assert sup.command(jog(press=7)) is Decision.HELD and sup.active is None
+    assert sup.command(jog(press=7, axis=2)) is Decision.HELD            # whatever that press's message says
+    assert sup.command(jog(press=8)) is Decision.START                   # the next press moves
+    assert sup.command(jog(press=7, group="other")) is Decision.START    # another group's press numbers are its own
+    # a publisher without press numbers (press 0) jogs as before: release, then the same message starts again
+    sup2 = JogSupervisor(0.2, FakeClock())
+    assert sup2.command(jog()) is Decision.START
+    assert sup2.command(jog(direction=0)) is Decision.STOP
+    assert sup2.command(jog()) is Decision.START
+
+
 def test_supervisor_stop_replace_never_queue() -> None:
     clock = FakeClock()
     sup = JogSupervisor(0.2, clock)

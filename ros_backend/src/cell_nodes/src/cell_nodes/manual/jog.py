@@ -11,6 +11,8 @@ The page publishes the held jog every 50 ms and direction 0 on release. Rules (D
   from another session did not hold while the holder's thumb stayed down (the next heartbeat restarted the arm).
   The heartbeat timeout does not hold the press: on a live link that stalled for a moment the jog goes on once
   heartbeats come again (the driver drops late ones by their stamp); holding it there failed the loaded e2e host.
+- a press that was released never moves the arm again: a heartbeat of it that arrives after its release (delayed on
+  the way) is held (press numbers are never reused; press 0, a publisher without them, is not remembered).
 The clock is injected so the timeout is tested without sleeping. Not thread-safe: the driver holds its lock.
 """
 from __future__ import annotations
@@ -67,10 +69,17 @@ class JogSupervisor:
         self.pressed: Optional[Jog] = None   # the last jog started and not released (held by a stop even when the
                                              # heartbeat timeout had already stopped it)
         self.last_beat = 0.0
+        # The last press released, per group: a heartbeat of it that comes after its release (a message the link
+        # delayed) must not start the arm again. Press numbers are never reused (0: a publisher without them).
+        self.ended: dict[str, int] = {}
 
     def command(self, jog: Jog) -> Decision:
         if jog.direction == 0:  # released: the next press starts
+            if jog.press:
+                self.ended[jog.group] = jog.press
             return Decision.STOP if self.clear(released=True) is not None else Decision.NOTHING
+        if jog.press and self.ended.get(jog.group) == jog.press:
+            return Decision.HELD
         now = self.clock()
         if jog.same_motion(self.active):
             self.last_beat = now
