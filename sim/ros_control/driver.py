@@ -70,6 +70,8 @@ class ArmDriver:
         self._stop.set()
         for t in self._threads:
             t.join(0.5)
+        # The server's status timer would otherwise publish on a topic rospy is closing (a traceback at exit).
+        self.server.stop()
         self.sub_command.unregister()
         self.suction.shutdown("sim stopping")
 
