@@ -4,6 +4,7 @@ the recordings directory's retention."""
 from __future__ import annotations
 
 import io
+import json
 import os
 from pathlib import Path
 from typing import Any, List
@@ -21,6 +22,8 @@ from cell_nodes.recorder.config import RecorderConfigError, parse_recorder
 from cell_nodes.recorder.core import Recorder, RecorderConfig
 from cell_nodes.recorder.mcap_file import write_mcap
 from cell_nodes.recorder.ring import OVERHEAD_BYTES, RawMessage, Ring, Schema
+from cell_nodes.recorder.sidecar import sidecar_path
+from cell_nodes.recorder.timeline import Change, Timeline, alarms_text, process_text
 
 S = 1_000_000_000
 ROOT = Path(__file__).resolve().parents[4]
@@ -75,6 +78,20 @@ def test_a_window_is_a_copy_in_time_order() -> None:
     assert [m.t_ns for m in w] == [3 * S, 4 * S, 5 * S, 6 * S]
     ring.add(text(99, 11 * S))
     assert len(w) == 4
+
+
+def test_a_window_carries_in_each_topics_last_value_from_before_it() -> None:
+    ring = Ring(seconds=10, max_bytes=1 << 20)
+    ring.add(raw("/cell/mode", String(data="running"), 1 * S))       # latched, once: long gone from the ring
+    for i in range(20, 40):
+        ring.add(text(i, i * S))
+    assert ring.stats().oldest_ns == 29 * S
+    w = ring.window(32 * S, 34 * S, carry_in=True)
+    assert [(m.topic, m.t_ns, m.received_ns) for m in w] == [
+        ("/cell/mode", 32 * S, 1 * S), ("/t", 32 * S, 31 * S), ("/t", 32 * S, None), ("/t", 33 * S, None),
+        ("/t", 34 * S, None)]
+    assert w[0].data == raw("/cell/mode", String(data="running"), 0).data
+    assert [m.t_ns for m in ring.window(32 * S, 34 * S)] == [32 * S, 33 * S, 34 * S]   # without: only what came
 
 
 @pytest.mark.parametrize("seconds, max_bytes", [(0, 10), (-1, 10), (1, 0)])
@@ -150,10 +167,14 @@ def test_retention_deletes_the_oldest_past_the_count_or_the_bytes_never_the_newe
     for i in range(6):
         recording(tmp_path, f"r{i}.mcap", 100, 1000 + i)
     (tmp_path / f"{mcap_file.TEMP_PREFIX}cut.mcap").write_bytes(b"torn")     # a save cut by a power loss
+    (tmp_path / f"{mcap_file.TEMP_PREFIX}cut.json").write_bytes(b"{")
+    (tmp_path / "r0.json").write_text("{}")                                    # descriptions go with their files
+    (tmp_path / "r2.json").write_text("{}")
     (tmp_path / "notes.txt").write_text("not a recording")
     assert retention.prune(str(tmp_path), max_count=4, max_bytes=10_000) == ["r0.mcap", "r1.mcap"]
     assert [r.name for r in retention.recordings(str(tmp_path))] == ["r2.mcap", "r3.mcap", "r4.mcap", "r5.mcap"]
-    assert sorted(os.listdir(tmp_path)) == ["notes.txt", "r2.mcap", "r3.mcap", "r4.mcap", "r5.mcap"]
+    assert sorted(os.listdir(tmp_path)) == ["notes.txt", "r2.json", "r2.mcap", "r3.mcap", "r4.mcap", "r5.mcap"]
+    os.unlink(tmp_path / "r2.json")
     assert retention.prune(str(tmp_path), max_count=10, max_bytes=250) == ["r2.mcap", "r3.mcap"]
     recording(tmp_path, "big.mcap", 1000, 2000)                  # the newest, alone over the budget: it stays
     assert retention.prune(str(tmp_path), max_count=10, max_bytes=250) == ["r4.mcap", "r5.mcap"]
@@ -182,12 +203,55 @@ def test_a_new_error_alarm_saves_the_seconds_before_it_and_after_it(tmp_path: Pa
     assert rec.save_due(104 * S) is None                         # its 5 s after are not over yet
     saved = rec.save_due(107 * S)
     assert saved is not None and saved.name == "19700101T000140.000Z-alarm-robot-protective-stop-protective-stop.mcap"
-    assert (saved.start_ns, saved.end_ns, saved.messages) == (90 * S, 105 * S, 16)
+    assert (saved.start_ns, saved.end_ns, saved.messages) == (90 * S, 105 * S, 17)
     with open(saved.path, "rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
-        positions = [m.position[0] for _, _, _, m in reader.iter_decoded_messages()]
-    assert positions == [float(t) for t in range(90, 106)]       # 10 s before the alarm to 5 s after
+        read = [(m.log_time, m.publish_time, msg.position[0]) for _, _, m, msg in reader.iter_decoded_messages()]
+    # 10 s before the alarm to 5 s after, and the value at the start (received at 89 s) logged at the start
+    assert read == [(90 * S, 89 * S, 89.0)] + [(t * S, t * S, float(t)) for t in range(90, 106)]
     assert rec.save_due(200 * S) is None                         # written once
+
+
+def test_each_recording_has_a_description_with_its_topics_and_timeline(tmp_path: Path) -> None:
+    rec = recorder(tmp_path)
+    rec.mark("mode", "running", 50 * S)                          # before the window: carried in at its start
+    rec.mark("process", "running · Move to part 1", 91 * S)
+    joints(rec, range(85, 100))
+    rec.mark("process", "running · Move to part 1", 92 * S)      # the same again: no change
+    rec.mark("alarms", "robot.protective_stop: Protective stop", 100 * S)
+    rec.alarms([("robot.protective_stop", Alarm.ERROR, "Protective stop")], 100 * S)
+    rec.mark("process", "error · Move failed", 101 * S)
+    rec.mark("mode", "alarm", 101 * S)
+    rec.mark("mode", "idle", 106 * S)                            # after the window
+    saved = rec.save_due(105 * S)
+    assert saved is not None and saved.sidecar_error == ""
+    d = json.loads(Path(sidecar_path(saved.path)).read_text())
+    assert (d["name"], d["reason"], d["alarms"]) == (saved.name, "alarm robot.protective_stop: Protective stop",
+                                                     ["robot.protective_stop"])
+    assert (d["at_ms"], d["start_ms"], d["end_ms"], d["duration_s"], d["messages"]) == (100_000, 90_000, 105_000, 15, 11)
+    assert d["size"] == os.path.getsize(saved.path)
+    assert d["topics"] == [{"topic": "/joint_states", "type": "sensor_msgs/JointState", "count": 11}]
+    lanes = {lane["id"]: [(c["t_ms"], c["text"]) for c in lane["changes"]] for lane in d["timeline"]["lanes"]}
+    assert [lane["title"] for lane in d["timeline"]["lanes"]] == ["Alarms", "Process", "Operation mode"]
+    assert lanes == {"alarms": [(100_000, "robot.protective_stop: Protective stop")],
+                     "process": [(91_000, "running · Move to part 1"), (101_000, "error · Move failed")],
+                     "mode": [(90_000, "running"), (101_000, "alarm")]}
+
+
+def test_a_timeline_lane_forgets_what_is_older_than_its_span_but_its_value_then() -> None:
+    tl = Timeline(seconds=10, max_changes=100)
+    for t in range(0, 30, 2):
+        assert tl.mark("mode", t * S, f"m{t}")
+    assert not tl.mark("mode", 31 * S, "m28")
+    w = tl.window(20 * S, 30 * S)["mode"]
+    assert w == [Change(20 * S, "m20"), Change(22 * S, "m22"), Change(24 * S, "m24"), Change(26 * S, "m26"),
+                 Change(28 * S, "m28")]
+    assert tl.window(0, 30 * S)["mode"][0] == Change(16 * S, "m16")  # the value at the span's start (18 s) kept
+    assert tl.window(0, 30 * S)["alarms"] == []
+    few = Timeline(seconds=1000, max_changes=3)                  # a flapping value is bounded by count too
+    for t in range(10):
+        few.mark("alarms", t * S, str(t))
+    assert [c.text for c in few.window(0, 100 * S)["alarms"]] == ["7", "8", "9"]
 
 
 def test_an_alarm_still_active_does_not_record_again_others_join_the_waiting_recording(tmp_path: Path) -> None:
@@ -261,3 +325,11 @@ def test_a_section_the_node_cannot_use_names_the_field(section: Any, message: st
 def test_without_data_dir_or_directory_there_is_nowhere_to_record() -> None:
     with pytest.raises(RecorderConfigError, match="set DATA_DIR"):
         parse_recorder(cell("demo-cell.yaml"), {})
+
+
+def test_lane_values_say_what_an_engineer_reads() -> None:
+    assert alarms_text([("z.b", "second"), ("a.a", "first")]) == "a.a: first; z.b: second"
+    assert alarms_text([]) == ""
+    assert process_text("running", "Move to part 2 (approach)", "") == "running · Move to part 2 (approach)"
+    assert process_text("error", "Move to part 2", "Move failed: timeout") == "error · Move failed: timeout"
+    assert process_text("idle", "", "3 cycles done") == "idle"

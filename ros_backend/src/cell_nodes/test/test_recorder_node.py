@@ -6,6 +6,7 @@ active makes no second file; /cell/recorder/save makes one by hand. A cell file 
 at once, naming the field."""
 from __future__ import annotations
 
+import json
 import os
 import threading
 import time
@@ -51,7 +52,12 @@ def recorder(roscore: str, tmp_path_factory) -> Iterator[dict]:
     env = dict(os.environ, DATA_DIR=str(data_dir), PYTHONUNBUFFERED="1")
     client_node(f"{TAG}_client")
     joints = rospy.Publisher("/joint_states", JointState, queue_size=50)
+    from cell_msgs.msg import OperationMode, ProcessState, RecorderState
     alarms = rospy.Publisher(ALARMS, AlarmList, queue_size=5, latch=True)
+    mode = rospy.Publisher("/cell/mode", OperationMode, queue_size=5, latch=True)
+    process = rospy.Publisher("/cell/process/state", ProcessState, queue_size=5, latch=True)
+    states: List[Any] = []
+    state_sub = rospy.Subscriber("/cell/recorder/state", RecorderState, states.append)
     stop = threading.Event()
     sent: List[float] = []
 
@@ -67,15 +73,16 @@ def recorder(roscore: str, tmp_path_factory) -> Iterator[dict]:
     node = nodes.run("recorder", "recorder_node", f"_cell_config:={path}", f"__name:={TAG}", env=env)
     try:
         nodes.wait_ready("/cell/recorder/save", what="the recorder's save service")
-        yield {"dir": data_dir / "recordings", "alarms": alarms, "sent": sent, "node": node}
+        yield {"dir": data_dir / "recordings", "alarms": alarms, "sent": sent, "node": node, "mode": mode,
+               "process": process, "states": states}
     finally:
         stop.set()
         pump.join(2)
         nodes.stop()
         print(f"\nrecorder log:\n{node.tail()}")
         nodes.check()
-        joints.unregister()
-        alarms.unregister()
+        for x in (joints, alarms, mode, process, state_sub):
+            x.unregister()
 
 
 def alarm_list(*active: str) -> Any:
@@ -85,12 +92,28 @@ def alarm_list(*active: str) -> Any:
 
 
 def test_a_new_error_alarm_saves_the_seconds_before_it_as_mcap(recorder: dict) -> None:
+    from cell_msgs.msg import OperationMode, ProcessState
+    states = recorder["states"]
+    wait_for(lambda: states and states[-1].last_saved == "" and states[-1].pending == "", 10, what="the first state")
     recorder["alarms"].publish(alarm_list())
+    recorder["mode"].publish(OperationMode(mode="running", source="test", stamp=rospy.Time.now()))
+    recorder["process"].publish(ProcessState(state="running", step="Move to part 1"))
     wait_for(lambda: len(recorder["sent"]) > 200, 10, what="4 s of joint states")    # more than `before` s
     at = time.time()
     recorder["alarms"].publish(alarm_list("device.gripper"))
+    wait_for(lambda: states[-1].pending == "alarm device.gripper: device.gripper happened", 5, what="a pending save")
+    assert abs(states[-1].pending_until.to_sec() - (at + 1)) < 0.5                    # `after` s from the alarm
+    recorder["mode"].publish(OperationMode(mode="alarm", source="safety", stamp=rospy.Time.now()))
     wait_for(lambda: len(finished(recorder["dir"])) == 1, 10, what="one recording")
     [name] = finished(recorder["dir"])
+    wait_for(lambda: states[-1].last_saved == name, 5, what="the state naming the recording")
+    assert (states[-1].pending, states[-1].saved_count, states[-1].error) == ("", 1, "")
+    about = json.loads((recorder["dir"] / name.replace(".mcap", ".json")).read_text())
+    lanes = {lane["id"]: [c["text"] for c in lane["changes"]] for lane in about["timeline"]["lanes"]}
+    assert lanes == {"alarms": ["", "device.gripper: device.gripper happened"], "process": ["running · Move to part 1"],
+                     "mode": ["running", "alarm"]}
+    assert about["reason"] == "alarm device.gripper: device.gripper happened" and about["alarms"] == ["device.gripper"]
+    assert {t["topic"] for t in about["topics"]} >= {"/joint_states", ALARMS, "/cell/mode", "/cell/process/state"}
     assert name.endswith("-alarm-device-gripper-device-gripper-happened.mcap")
     read = decoded(recorder["dir"] / name)
     stamps = [t / 1e9 for topic, t, _ in read if topic == "/joint_states"]

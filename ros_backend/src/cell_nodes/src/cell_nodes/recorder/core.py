@@ -14,6 +14,8 @@ from typing import Callable, Iterable, List, Optional, Tuple
 from . import retention
 from .mcap_file import SUFFIX, write_mcap
 from .ring import RawMessage, Ring
+from .sidecar import describe, sidecar_path, write_sidecar
+from .timeline import Timeline
 
 S = 1_000_000_000
 SLACK_S = 5.0
@@ -50,6 +52,7 @@ class Saved:
     start_ns: int
     end_ns: int
     deleted: Tuple[str, ...]            # older recordings retention removed to make room
+    sidecar_error: str = ""             # why its JSON description was not written ("" it was)
 
 
 def file_name(at_ns: int, reason: str) -> str:
@@ -67,6 +70,7 @@ class Recorder:
         # The ring holds the whole window, `before` + `after` (a recording is written once its `after` is over), and
         # some slack for a save that runs late (a busy host).
         self.ring = Ring(config.before_s + config.after_s + SLACK_S, config.max_bytes)
+        self.timeline = Timeline(config.before_s + config.after_s + SLACK_S)
         self.clock_ns = clock_ns
         self.pending: Optional[Pending] = None
         self._active: set[str] = set()
@@ -74,6 +78,10 @@ class Recorder:
 
     def add(self, msg: RawMessage) -> None:
         self.ring.add(msg)
+
+    def mark(self, lane: str, text: str, t_ns: Optional[int] = None) -> None:
+        """A timeline lane's value from now on (timeline.LANES: alarms, process, mode)."""
+        self.timeline.mark(lane, self.clock_ns() if t_ns is None else t_ns, text)
 
     def alarms(self, active: Iterable[Tuple[str, int, str]], t_ns: Optional[int] = None) -> Optional[Pending]:
         """The active alarms now (id, severity, text). A new one at min_severity or above starts a recording, or
@@ -110,12 +118,18 @@ class Recorder:
                 return None
             self.pending = None
         start, end = p.at_ns - int(self.config.before_s * S), p.end_ns(self.config.after_s)
-        window = self.ring.window(start, end)
+        window = self.ring.window(start, end, carry_in=True)
         os.makedirs(self.config.directory, exist_ok=True)
         name = file_name(p.at_ns, p.reason)
         path = os.path.join(self.config.directory, name)
         meta = {"reason": p.reason, "at_ns": str(p.at_ns), "before_s": str(self.config.before_s),
                 "after_s": str(self.config.after_s), "alarms": ",".join(p.alarms)}
         size = write_mcap(path, window, meta)
+        sidecar_error = ""
+        try:
+            write_sidecar(sidecar_path(path), describe(name, p.reason, p.at_ns, start, end, size, window, p.alarms,
+                                                       self.timeline.window(start, end)))
+        except OSError as e:  # the recording itself is safe: it is listed by name, size and time
+            sidecar_error = str(e)
         deleted = retention.prune(self.config.directory, self.config.max_count, self.config.max_total_bytes)
-        return Saved(name, path, size, p.reason, len(window), start, end, tuple(deleted))
+        return Saved(name, path, size, p.reason, len(window), start, end, tuple(deleted), sidecar_error)

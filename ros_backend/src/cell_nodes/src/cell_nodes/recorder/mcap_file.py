@@ -42,7 +42,7 @@ def write_mcap(path: str, messages: Iterable[RawMessage], metadata: Mapping[str,
                         topic=m.topic, message_encoding=MESSAGE_ENCODING, schema_id=sid,
                         metadata={"md5sum": m.schema.md5sum})
                 sequence[cid] = sequence.get(cid, 0) + 1
-                writer.add_message(channel_id=cid, log_time=m.t_ns, publish_time=m.t_ns, data=m.data,
+                writer.add_message(channel_id=cid, log_time=m.t_ns, publish_time=m.received_ns or m.t_ns, data=m.data,
                                    sequence=sequence[cid])
             if metadata:
                 writer.add_metadata("recording", {str(k): str(v) for k, v in metadata.items()})

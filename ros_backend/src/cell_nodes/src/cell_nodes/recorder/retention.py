@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import List
 
 from .mcap_file import SUFFIX, TEMP_PREFIX
+from .sidecar import SIDECAR_SUFFIX, sidecar_path
 
 
 @dataclass(frozen=True)
@@ -34,9 +35,9 @@ def recordings(directory: str) -> List[Recording]:
 
 def prune(directory: str, max_count: int, max_bytes: int) -> List[str]:
     """Delete the oldest recordings until at most max_count remain and they total at most max_bytes (the newest
-    stays). Leftover temp files are removed too. Returns the names deleted."""
+    stays), each with its JSON description. Leftover temp files are removed too. Returns the names deleted."""
     for e in list(os.scandir(directory)) if os.path.isdir(directory) else []:
-        if e.name.startswith(TEMP_PREFIX) and e.name.endswith(SUFFIX):
+        if e.name.startswith(TEMP_PREFIX) and e.name.endswith((SUFFIX, SIDECAR_SUFFIX)):
             try:
                 os.unlink(e.path)
             except OSError:
@@ -46,10 +47,11 @@ def prune(directory: str, max_count: int, max_bytes: int) -> List[str]:
     total = sum(r.size for r in recs)
     while len(recs) > 1 and (len(recs) > max_count or total > max_bytes):
         oldest = recs.pop(0)
-        try:
-            os.unlink(oldest.path)
-        except FileNotFoundError:
-            pass
+        for p in (oldest.path, sidecar_path(oldest.path)):
+            try:
+                os.unlink(p)
+            except FileNotFoundError:
+                pass
         total -= oldest.size
         deleted.append(oldest.name)
     return deleted

@@ -4,7 +4,8 @@ from __future__ import annotations
 import threading
 from collections import deque
 from dataclasses import dataclass
-from typing import Deque, List, Optional
+from dataclasses import replace
+from typing import Deque, Dict, List, Optional
 
 # What one kept message costs besides its payload (the record, the deque slot): counted so that a flood of tiny
 # messages is bounded too.
@@ -25,6 +26,7 @@ class RawMessage:
     schema: Schema
     data: bytes          # the serialized message, as on the wire
     t_ns: int            # when it was received (wall clock, ns since the epoch)
+    received_ns: Optional[int] = None  # set when t_ns was moved: a value carried into a window from before it
 
     @property
     def cost(self) -> int:
@@ -50,6 +52,9 @@ class Ring:
         self.span_ns = int(seconds * 1e9)
         self.max_bytes = int(max_bytes)
         self._items: Deque[RawMessage] = deque()
+        # Each topic's newest message that has left the ring: a latched state published once an hour ago is still
+        # the state at the start of a window (one message per topic, outside the byte bound).
+        self._gone: Dict[str, RawMessage] = {}
         self._bytes = 0
         self._dropped = 0
         self._refused = 0
@@ -69,18 +74,30 @@ class Ring:
     def _trim(self, now_ns: int) -> None:
         items = self._items
         while items and (items[0].t_ns < now_ns - self.span_ns or self._bytes > self.max_bytes):
-            self._bytes -= items.popleft().cost
+            old = items.popleft()
+            self._bytes -= old.cost
             self._dropped += 1
+            self._gone[old.topic] = old
 
     def expire(self, now_ns: int) -> None:
         """Drop what is older than the span at `now_ns` (a quiet cell still forgets)."""
         with self._lock:
             self._trim(now_ns)
 
-    def window(self, start_ns: int, end_ns: int) -> List[RawMessage]:
-        """The messages received in [start_ns, end_ns], oldest first (a copy: the ring goes on)."""
+    def window(self, start_ns: int, end_ns: int, carry_in: bool = False) -> List[RawMessage]:
+        """The messages received in [start_ns, end_ns], oldest first (a copy: the ring goes on). With carry_in, each
+        topic's last message before start_ns comes first, moved to start_ns (received_ns keeps when it came)."""
         with self._lock:
-            return [m for m in self._items if start_ns <= m.t_ns <= end_ns]
+            inside = [m for m in self._items if start_ns <= m.t_ns <= end_ns]
+            if not carry_in:
+                return inside
+            last = {t: m for t, m in self._gone.items() if m.t_ns < start_ns}
+            for m in self._items:
+                if m.t_ns >= start_ns:
+                    break
+                last[m.topic] = m
+            carried = sorted(last.values(), key=lambda m: m.t_ns)
+            return [replace(m, t_ns=start_ns, received_ns=m.t_ns) for m in carried] + inside
 
     def stats(self) -> RingStats:
         with self._lock:
