@@ -16,6 +16,7 @@ describe('routing from the feature list', () => {
       ['parameters', '/parameters'],
       ['routines', '/routines'],
       ['alarms', '/alarms'],
+      ['recorder', '/recorder'],
       ['database', '/database'],
       ['system', '/system'],
     ]);

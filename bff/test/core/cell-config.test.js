@@ -22,16 +22,16 @@ test('the demo cell file is valid and has a section for every feature', () => {
 const broken = [
   ['unknown top-level field', (d) => { d.colour = 'red'; }, /unknown field "colour"/],
   ['missing cell name', (d) => { delete d.cell.name; }, /cell: missing field "name"/],
-  ['role page that does not exist', (d) => { d.roles.operator.pages.push('nowhere'); }, /roles\.operator\.pages\[8\]: unknown page "nowhere"/],
+  ['role page that does not exist', (d) => { d.roles.operator.pages.push('nowhere'); }, /roles\.operator\.pages\[9\]: unknown page "nowhere"/],
   ['wrong type', (d) => { d.operation_mode.modes = 'idle'; }, /operation_mode\.modes: must be array/],
   ['bad ROS name', (d) => { d.operation_mode.topic = 'cell mode'; }, /operation_mode\.topic: must match pattern/],
   ['initial mode not listed', (d) => { d.operation_mode.initial = 'dancing'; }, /operation_mode\.initial: "dancing"/],
   ['graph kind', (d) => { d.sensors[0].kind = 'pie'; }, /sensors\[0\]\.kind: must be one of time-series, scatter/],
   ['path escape in database dir', (d) => { d.database.directory = '../etc'; }, /database\.directory: must match pattern/],
-  ['page without a feature', (d) => { d.pages.push({ id: 'bogus', title: 'Bogus' }); }, /pages\[12\]: no feature "bogus"/],
+  ['page without a feature', (d) => { d.pages.push({ id: 'bogus', title: 'Bogus' }); }, /pages\[13\]: no feature "bogus"/],
   ['page without its section', (d) => { delete d.sensors; }, /pages\[5\]: page "sensors" needs the "sensors" section/],
-  ['commands of a feature the role does not see', (d) => { d.roles.operator.commands.push('parameters'); }, /roles\.operator\.commands\[3\]: "parameters" is not one of the role's pages/],
-  ['commands of a feature that has none', (d) => { d.roles.admin.commands.push('sensors'); }, /roles\.admin\.commands\[6\]: feature "sensors" has no commands/],
+  ['commands of a feature the role does not see', (d) => { d.roles.operator.commands.push('parameters'); }, /roles\.operator\.commands\[4\]: "parameters" is not one of the role's pages/],
+  ['commands of a feature that has none', (d) => { d.roles.admin.commands.push('sensors'); }, /roles\.admin\.commands\[7\]: feature "sensors" has no commands/],
   ['module role that does not exist', (d) => { d.modules[0].roles = ['ghost']; }, /modules\[0\]\.roles\[0\]: unknown role "ghost"/],
   ['old motion section name', (d) => { d.motion = d.manual; }, /unknown field "motion"/],
 ];
@@ -64,7 +64,7 @@ test('check-config CLI: exit 0 on the demo, exit 2 naming the bad field otherwis
 
 test('pages and config are filtered by role', () => {
   const cell = loadCell(DEMO, FEATURES);
-  assert.deepEqual(pagesFor(cell, 'operator').map((p) => p.id), ['home', 'modules', 'process', 'manual', 'scene', 'sensors', 'video', 'alarms']);
+  assert.deepEqual(pagesFor(cell, 'operator').map((p) => p.id), ['home', 'modules', 'process', 'manual', 'scene', 'sensors', 'video', 'alarms', 'recorder']);
   assert.ok(pagesFor(cell, 'admin').some((p) => p.id === 'system'));
   assert.deepEqual(pagesFor(cell, 'nobody'), []);
   assert.equal(mayViewPage(cell, 'operator', 'system'), false);
@@ -73,8 +73,8 @@ test('pages and config are filtered by role', () => {
   assert.equal(c.role, 'operator');
   assert.equal(c.operation_mode.topic, '/cell/mode');
   assert.equal(c.roles, undefined, 'the grants of other roles are not sent');
-  assert.deepEqual(Object.keys(c.features).sort(), ['alarms', 'manual', 'modules', 'process', 'scene', 'sensors', 'video']);
-  assert.deepEqual(c.commands, ['modules', 'process', 'alarms']);
+  assert.deepEqual(Object.keys(c.features).sort(), ['alarms', 'manual', 'modules', 'process', 'recorder', 'scene', 'sensors', 'video']);
+  assert.deepEqual(c.commands, ['modules', 'process', 'alarms', 'recorder']);
   assert.deepEqual(c.control, { take_over: false, heartbeat_timeout_s: 5 });
   assert.deepEqual(c.stop, { service: '/cell/manual/stop', type: 'std_srvs/Trigger' }, 'every role that sees a page stops the robot');
   const watcher = { ...cell, roles: { ...cell.roles, watcher: { pages: ['sensors'] } } };

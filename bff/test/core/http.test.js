@@ -49,7 +49,7 @@ test('login sets an HttpOnly SameSite=Strict cookie; me and config follow the ro
   assert.match(setCookie, /SameSite=Strict/);
   assert.deepEqual(await (await get('/api/auth/me', cookie)).json(), { username: 'operator', role: 'operator' });
   const cfg = await (await get('/api/config', cookie)).json();
-  assert.deepEqual(cfg.pages.map((p) => p.id), ['home', 'modules', 'process', 'manual', 'scene', 'sensors', 'video', 'alarms']);
+  assert.deepEqual(cfg.pages.map((p) => p.id), ['home', 'modules', 'process', 'manual', 'scene', 'sensors', 'video', 'alarms', 'recorder']);
   assert.equal(cfg.operation_mode.type, 'cell_msgs/OperationMode');
 });
 

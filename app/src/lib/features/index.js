@@ -18,6 +18,7 @@ import routinesIcon from './routines/icon.js';
 import parametersIcon from './parameters/icon.js';
 import alarmsIcon from './alarms/icon.js';
 import databaseIcon from './database/icon.js';
+import recorderIcon from './recorder/icon.js';
 import systemIcon from './system/icon.js';
 import { alarmSignal } from './alarms/signal.svelte.js';
 
@@ -57,6 +58,7 @@ export const features = [
     id: 'alarms', path: '/alarms', title: 'Alarms', icon: alarmsIcon, load: () => import('./alarms/Page.svelte'),
     shell: () => import('./alarms/Shell.svelte'), badge: () => alarmSignal.badge,
   },
+  { id: 'recorder', path: '/recorder', title: 'Recordings', icon: recorderIcon, load: () => import('./recorder/Page.svelte') },
   { id: 'database', path: '/database', title: 'Database', icon: databaseIcon, load: () => import('./database/Page.svelte') },
   { id: 'system', path: '/system', title: 'System', icon: systemIcon, load: () => import('./system/Page.svelte') },
 ];

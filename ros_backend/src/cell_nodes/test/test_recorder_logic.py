@@ -313,6 +313,7 @@ def test_the_default_topics_come_from_the_rest_of_the_cell_file() -> None:
     ({"memory_mb": float("nan")}, "recorder.memory_mb"),
     ({"severity": "fatal"}, "recorder.severity: expected one of warning, error, got 'fatal'"),
     ({"topics": ["joint_states"]}, "recorder.topics: expected a list of global ROS names"),
+    ({"directory": "recordings"}, "recorder.directory: expected an absolute path, got 'recordings'"),
 ])
 def test_a_section_the_node_cannot_use_names_the_field(section: Any, message: str) -> None:
     doc = cell("demo-cell.yaml")

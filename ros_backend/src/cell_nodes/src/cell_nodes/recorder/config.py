@@ -72,6 +72,8 @@ def parse_recorder(cell: Mapping[str, Any], environ: Mapping[str, str] = os.envi
         if not data_dir:
             raise RecorderConfigError("recorder: no directory for the recordings: set DATA_DIR (or recorder.directory)")
         directory = os.path.join(data_dir, SUBDIR)
+    elif not isinstance(directory, str) or not directory.startswith("/"):
+        raise RecorderConfigError(f"recorder.directory: expected an absolute path, got {directory!r}")
     config = RecorderConfig(
         directory=os.path.abspath(str(directory)),
         before_s=number("before_s", 120, 1, 3600),
