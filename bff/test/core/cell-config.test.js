@@ -33,6 +33,7 @@ const broken = [
   ['commands of a feature the role does not see', (d) => { d.roles.operator.commands.push('parameters'); }, /roles\.operator\.commands\[4\]: "parameters" is not one of the role's pages/],
   ['commands of a feature that has none', (d) => { d.roles.admin.commands.push('sensors'); }, /roles\.admin\.commands\[7\]: feature "sensors" has no commands/],
   ['module role that does not exist', (d) => { d.modules[0].roles = ['ghost']; }, /modules\[0\]\.roles\[0\]: unknown role "ghost"/],
+  ['recorder decimating what is not a topic', (d) => { d.recorder.decimate_s = { 'camera frames': 2 }; }, /recorder\.decimate_s: must match pattern/],
   ['old motion section name', (d) => { d.motion = d.manual; }, /unknown field "motion"/],
 ];
 for (const [name, mutate, expected] of broken) {

@@ -314,6 +314,8 @@ def test_the_default_topics_come_from_the_rest_of_the_cell_file() -> None:
     ({"severity": "fatal"}, "recorder.severity: expected one of warning, error, got 'fatal'"),
     ({"topics": ["joint_states"]}, "recorder.topics: expected a list of global ROS names"),
     ({"directory": "recordings"}, "recorder.directory: expected an absolute path, got 'recordings'"),
+    ({"decimate_s": {"/cam": 0}}, "recorder.decimate_s: expected global ROS names mapped to seconds"),
+    ({"decimate_s": ["/cam"]}, "recorder.decimate_s"),
 ])
 def test_a_section_the_node_cannot_use_names_the_field(section: Any, message: str) -> None:
     doc = cell("demo-cell.yaml")
@@ -334,3 +336,20 @@ def test_lane_values_say_what_an_engineer_reads() -> None:
     assert process_text("running", "Move to part 2 (approach)", "") == "running · Move to part 2 (approach)"
     assert process_text("error", "Move to part 2", "Move failed: timeout") == "error · Move failed: timeout"
     assert process_text("idle", "", "3 cycles done") == "idle"
+
+
+def test_a_decimated_topic_keeps_one_message_per_its_seconds_the_others_all(tmp_path: Path) -> None:
+    rec = recorder(tmp_path, decimate_s={"/camera": 1.0})
+    kept = [rec.add(raw("/camera", String(data=f"frame {i}"), i * S // 10)) for i in range(35)]   # 10 Hz for 3.5 s
+    assert [i for i, k in enumerate(kept) if k] == [0, 10, 20, 30]
+    assert rec.decimated == 31
+    assert all(rec.add(text(i, i * S // 10)) for i in range(35))                                  # not decimated
+    assert rec.ring.stats().messages == 4 + 35
+
+
+def test_decimated_topics_are_recorded_without_being_listed() -> None:
+    demo = cell("demo-cell.yaml")
+    setup = parse_recorder({**demo, "recorder": {"decimate_s": {"/cell/camera/global/image/compressed": 2}}},
+                           {"DATA_DIR": "/tmp/x"})
+    assert setup.config.decimate_s == {"/cell/camera/global/image/compressed": 2.0}
+    assert setup.topics[-1] == "/cell/camera/global/image/compressed" and "/cell/alarms/list" in setup.topics

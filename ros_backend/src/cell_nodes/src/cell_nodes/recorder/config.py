@@ -66,6 +66,12 @@ def parse_recorder(cell: Mapping[str, Any], environ: Mapping[str, str] = os.envi
         topics = default_topics(cell)
     elif not isinstance(topics, list) or not all(isinstance(t, str) and _TOPIC.fullmatch(t) for t in topics):
         raise RecorderConfigError(f"recorder.topics: expected a list of global ROS names, got {topics!r}")
+    decimate = section.get("decimate_s", {})
+    if not isinstance(decimate, dict) or not all(
+            isinstance(t, str) and _TOPIC.fullmatch(t) and not isinstance(v, bool) and isinstance(v, (int, float))
+            and math.isfinite(v) and 0 < v <= 3600 for t, v in decimate.items()):
+        raise RecorderConfigError(f"recorder.decimate_s: expected global ROS names mapped to seconds (0 to 3600), "
+                                  f"got {decimate!r}")
     directory = section.get("directory")
     if directory is None:
         data_dir = environ.get("DATA_DIR")
@@ -82,5 +88,7 @@ def parse_recorder(cell: Mapping[str, Any], environ: Mapping[str, str] = os.envi
         max_count=int(number("keep_count", 20, 1, 10_000)),
         max_total_bytes=int(number("keep_mb", 1024, 1, 1_000_000) * MB),
         min_severity=SEVERITIES[severity],
+        decimate_s={t: float(v) for t, v in decimate.items()},
     )
-    return RecorderSetup(config, list(dict.fromkeys([*topics, ALARMS])), ALARMS)
+    # A decimated topic is recorded whether or not `topics` names it (a camera at one frame a second).
+    return RecorderSetup(config, list(dict.fromkeys([*topics, *decimate, ALARMS])), ALARMS)

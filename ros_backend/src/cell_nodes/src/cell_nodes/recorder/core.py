@@ -9,7 +9,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
-from typing import Callable, Iterable, List, Optional, Tuple
+from typing import Callable, Dict, Iterable, List, Mapping, Optional, Tuple
 
 from . import retention
 from .mcap_file import SUFFIX, write_mcap
@@ -30,6 +30,7 @@ class RecorderConfig:
     max_count: int = 20                 # recordings kept on disk
     max_total_bytes: int = 1024 * 1024 * 1024
     min_severity: int = 2               # cell_msgs/Alarm: 0 info, 1 warning, 2 error
+    decimate_s: Mapping[str, float] = field(default_factory=dict)  # topic -> at most one message per this many s
 
 
 @dataclass
@@ -75,9 +76,19 @@ class Recorder:
         self.pending: Optional[Pending] = None
         self._active: set[str] = set()
         self._lock = threading.Lock()
+        self._kept_at: Dict[str, int] = {}   # decimated topics: when the last message kept came
+        self.decimated = 0                   # messages left out by decimate_s
 
-    def add(self, msg: RawMessage) -> None:
-        self.ring.add(msg)
+    def add(self, msg: RawMessage) -> bool:
+        """Keep a message (False: left out, by its topic's decimation or the ring's byte bound)."""
+        every = self.config.decimate_s.get(msg.topic)
+        if every is not None:
+            last = self._kept_at.get(msg.topic)
+            if last is not None and msg.t_ns - last < every * S:
+                self.decimated += 1
+                return False
+            self._kept_at[msg.topic] = msg.t_ns
+        return self.ring.add(msg)
 
     def mark(self, lane: str, text: str, t_ns: Optional[int] = None) -> None:
         """A timeline lane's value from now on (timeline.LANES: alarms, process, mode)."""
