@@ -17,6 +17,7 @@ describe('routing from the feature list', () => {
       ['routines', '/routines'],
       ['alarms', '/alarms'],
       ['recorder', '/recorder'],
+      ['inspect', '/inspect'],
       ['database', '/database'],
       ['system', '/system'],
     ]);
@@ -34,7 +35,7 @@ describe('routing from the feature list', () => {
       expect(typeof mod.default).toBe('function');
     }
     expect(new Set(features.map((f) => f.path)).size).toBe(features.length);
-  });
+  }, 60_000); // compiles every page (three.js, Chart.js) on a cold cache: seconds each on a busy 2-core machine
 
   it('menu keeps config order, drops ids this build has no feature for, uses config titles', () => {
     const m = menuPages([

@@ -19,6 +19,7 @@ import parametersIcon from './parameters/icon.js';
 import alarmsIcon from './alarms/icon.js';
 import databaseIcon from './database/icon.js';
 import recorderIcon from './recorder/icon.js';
+import inspectIcon from './inspect/icon.js';
 import systemIcon from './system/icon.js';
 import { alarmSignal } from './alarms/signal.svelte.js';
 
@@ -59,6 +60,7 @@ export const features = [
     shell: () => import('./alarms/Shell.svelte'), badge: () => alarmSignal.badge,
   },
   { id: 'recorder', path: '/recorder', title: 'Recordings', icon: recorderIcon, load: () => import('./recorder/Page.svelte') },
+  { id: 'inspect', path: '/inspect', title: 'Inspect', icon: inspectIcon, load: () => import('./inspect/Page.svelte') },
   { id: 'database', path: '/database', title: 'Database', icon: databaseIcon, load: () => import('./database/Page.svelte') },
   { id: 'system', path: '/system', title: 'System', icon: systemIcon, load: () => import('./system/Page.svelte') },
 ];
