@@ -14,10 +14,17 @@ export async function loginAs(page, who) {
   await expect(page.getByTestId('page-title')).toBeVisible();
 }
 
-/** On a phone the side menu is a drawer: open it when its toggle is shown. @param {import('@playwright/test').Page} page */
+/**
+ * On a phone the side menu is a drawer: open it. From 768 px (tablet, desktop) the menu is always on screen and
+ * the toggle is hidden by CSS; the viewport decides, not the toggle's visibility at one moment (CI: a toggle seen
+ * as visible on desktop before the layout's styles applied, then hidden under the click).
+ * @param {import('@playwright/test').Page} page
+ */
 export async function openMenu(page) {
   const toggle = page.getByTestId('menu-toggle');
-  if (await toggle.isVisible()) {
+  if ((page.viewportSize()?.width ?? 0) >= 768) {
+    await expect(toggle).toBeHidden();
+  } else {
     await toggle.click();
   }
   await expect(page.getByTestId('user-name')).toBeVisible();
