@@ -22,8 +22,10 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
+from collections import deque
 from types import SimpleNamespace
-from typing import Optional
+from typing import Deque, Optional
 
 from .cell_file import CellDevices, Stream
 from .frames import TF_STATIC, base_frames, tf_message
@@ -34,6 +36,26 @@ from .stations import station_boxes
 from .urdf import urdf_text
 
 log = logging.getLogger("sim.ros")
+
+CAMERA_WINDOW_S = 2.0   # the frame rate a camera's diagnostics report is over the last 2 s
+
+
+def camera_diagnostic(node: str, stream: Stream, frame_times: "list[float]", watched: bool,
+                      now: float) -> tuple[int, str, str, list[tuple[str, str]]]:
+    """(level, name, message, values) of a camera's status on /diagnostics, as a camera driver reports it: its
+    frame rate; WARN when someone watches and no frame came within the window (a camera renders only while
+    watched, so an idle one is fine)."""
+    recent = [t for t in frame_times if t >= now - CAMERA_WINDOW_S]
+    fps = len(recent) / CAMERA_WINDOW_S
+    if not watched:
+        level, message = 0, "idle: no subscriber"
+    elif not recent:
+        level, message = 1, f"no frame for {CAMERA_WINDOW_S:g} s while watched"
+    else:
+        level, message = 0, f"streaming at {fps:.1f} fps"
+    return level, f"{node}: camera {stream.name}", message, [
+        ("topic", stream.topic), ("frame rate (fps)", f"{fps:.1f}"), ("view", stream.view)]
+
 
 OBJECTS_RATE = 5.0  # Hz, /sim/objects and the scene markers (wall time): enough to watch a part being carried,
 #                    cheap on the physics lock
@@ -92,6 +114,15 @@ class RosBridge:
         self.pub_faults = rospy.Publisher("/sim/faults", AlarmList, queue_size=5, latch=True)
         self.pub_images: list[tuple[Stream, rospy.Publisher]] = [
             (s, rospy.Publisher(s.topic, CompressedImage, queue_size=2)) for s in devices.streams]
+        # The cameras' diagnostics (frame rate per stream), as a real camera driver publishes them.
+        self.pub_diagnostics = None
+        self._frames: dict[str, Deque[float]] = {s.name: deque(maxlen=200) for s in devices.streams}
+        if devices.streams:
+            from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+            self._diag_types = SimpleNamespace(DiagnosticArray=DiagnosticArray, DiagnosticStatus=DiagnosticStatus,
+                                               KeyValue=KeyValue)
+            self.pub_diagnostics = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=2)
+        self._node_name = node_name
         for s in devices.streams:
             log.info("camera %r on %s shows the %s view", s.name, s.topic, s.view)
         # One arm at the origin: the world frame is its base frame (`base`, as before); several arms: `world`.
@@ -193,12 +224,29 @@ class RosBridge:
 
     def _objects_loop(self) -> None:
         pacer = Pacer(1.0 / OBJECTS_RATE, self._stop)
+        last_diagnostics = 0.0
         while not self._stop.is_set():
             try:
                 self._publish_objects()
+                if self.pub_diagnostics is not None and time.monotonic() - last_diagnostics >= 1.0:
+                    last_diagnostics = time.monotonic()
+                    self._publish_diagnostics()
             except Exception:
                 log.exception("objects publish failed")
             pacer.wait()
+
+    def _publish_diagnostics(self) -> None:
+        d = self._diag_types
+        now = time.monotonic()
+        out = d.DiagnosticArray()
+        out.header.stamp = self.rospy.Time.now()
+        for s, pub in self.pub_images:
+            level, name, message, values = camera_diagnostic(self._node_name, s, list(self._frames[s.name]),
+                                                             pub.get_num_connections() > 0, now)
+            out.status.append(d.DiagnosticStatus(level=level, name=name, message=message, hardware_id=s.topic,
+                                                 values=[d.KeyValue(key=k, value=v) for k, v in values]))
+        assert self.pub_diagnostics is not None
+        self.pub_diagnostics.publish(out)
 
     def _publish_objects(self) -> None:
         with self.lock:  # the physics client is the controller loop's: read between two ticks
@@ -228,9 +276,11 @@ class RosBridge:
         msg.header.frame_id = f"camera_{view}"
         msg.format = "jpeg"
         msg.data = jpeg
+        now = time.monotonic()
         for s, pub in self.pub_images:
-            if s.view == view:
+            if s.view == view and pub.get_num_connections() > 0:
                 pub.publish(msg)
+                self._frames[s.name].append(now)
 
     def _publish_faults(self, faults: list[Fault]) -> None:
         from cell_msgs.msg import Alarm as AlarmMsg

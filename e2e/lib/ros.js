@@ -1,5 +1,5 @@
 // Talking to the stack's ROS side from tests, as an engineer would from a terminal.
-import { execFile } from 'node:child_process';
+import { execFile, spawn } from 'node:child_process';
 import { promisify } from 'node:util';
 import { REPO_ROOT } from './stack.js';
 
@@ -10,6 +10,24 @@ export function rosCli(command) {
   return run('bash', ['-c', `source scripts/ros-env.sh && ${command}`], {
     cwd: REPO_ROOT, env: { ...process.env, ROS_MASTER_URI: process.env.E2E_ROS_MASTER_URI }, timeout: 30_000,
   });
+}
+
+/**
+ * A ROS command line tool left running (e.g. `rostopic pub -r 20 ...`), in its own process group.
+ * @param {string} command
+ * @returns {{ kill: (signal?: NodeJS.Signals) => void }}
+ */
+export function rosCliRunning(command) {
+  const proc = spawn('bash', ['-c', `source scripts/ros-env.sh && exec ${command}`], {
+    cwd: REPO_ROOT, env: { ...process.env, ROS_MASTER_URI: process.env.E2E_ROS_MASTER_URI }, stdio: 'ignore', detached: true,
+  });
+  return {
+    kill: (signal = 'SIGINT') => {
+      try {
+        process.kill(-(/** @type {number} */ (proc.pid)), signal);
+      } catch { /* already gone */ }
+    },
+  };
 }
 
 /** @param {string} mode */

@@ -54,3 +54,15 @@ def wait_for_quiet(predicate, seconds: float) -> bool:
 def test_rig_refuses_a_view_the_sim_does_not_have() -> None:
     with pytest.raises(ValueError, match="ceiling"):
         CameraRig(None, (96, 72), rate=20.0, views=["workbench", "ceiling"])  # before any process starts
+
+
+def test_a_camera_reports_its_frame_rate_and_a_watched_camera_without_frames_warns() -> None:
+    from sim.cell_file import Stream
+    from sim.ros_bridge import camera_diagnostic
+    s = Stream(name="Bench", topic="/bench/compressed", view="workbench")
+    level, name, message, values = camera_diagnostic("sim_cell", s, [9.0 + i / 6 for i in range(12)], True, 11.0)
+    assert (level, name, message) == (0, "sim_cell: camera Bench", "streaming at 6.0 fps")
+    assert dict(values)["frame rate (fps)"] == "6.0" and dict(values)["topic"] == "/bench/compressed"
+    assert camera_diagnostic("sim_cell", s, [1.0], True, 11.0)[:3] == (1, "sim_cell: camera Bench",
+                                                                     "no frame for 2 s while watched")
+    assert camera_diagnostic("sim_cell", s, [], False, 11.0)[2] == "idle: no subscriber"

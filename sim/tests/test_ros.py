@@ -92,8 +92,25 @@ def test_cameras_publish_jpeg_at_configured_rate_on_the_cell_files_streams(ros_c
     wb = bytes(recs["/robot2/bench/compressed"].msgs[-1].data)
     gl = bytes(recs["/robot2/overview/compressed"].msgs[-1].data)
     assert wb != gl, "the two viewpoints must show different views"
+    # Each camera reports its frame rate on /diagnostics, as a camera driver does.
+    from diagnostic_msgs.msg import DiagnosticArray
+    diag = Recorder("/diagnostics", DiagnosticArray)
+    wait_for(lambda: diag.msgs and "streaming" in _camera_status(diag.msgs[-1], "Bench").message, 5,
+             what="the Bench camera's diagnostics")
+    bench = _camera_status(diag.msgs[-1], "Bench")
+    values = {kv.key: kv.value for kv in bench.values}
+    assert bench.level == 0 and values["topic"] == "/robot2/bench/compressed"
+    assert 3.0 <= float(values["frame rate (fps)"]) <= 7.5, values
     for rec in recs.values():
         rec.sub.unregister()
+    # Nobody watches any more: idle, not a fault.
+    wait_for(lambda: _camera_status(diag.msgs[-1], "Bench").message == "idle: no subscriber", 5,
+             what="the camera idle once unwatched")
+    diag.sub.unregister()
+
+
+def _camera_status(array, name: str):
+    return next(s for s in array.status if s.name == f"sim_cell: camera {name}")
 
 
 def _sim_publications() -> dict[str, str]:
@@ -107,7 +124,7 @@ def _sim_publications() -> dict[str, str]:
 @pytest.mark.parametrize("cell, expected", [
     (RENAMED, {**{t: "geometry_msgs/WrenchStamped" for t in WRENCH_TOPICS},
                TACTILE_TOPIC: "cell_msgs/Scatter", MARKERS_TOPIC: "visualization_msgs/MarkerArray",
-               **{t: "sensor_msgs/CompressedImage" for t in STREAMS}}),
+               **{t: "sensor_msgs/CompressedImage" for t in STREAMS}, "/diagnostics": "diagnostic_msgs/DiagnosticArray"}),
     (CELLS / "no-devices.yaml", {}),
 ], ids=["renamed-topics", "no-devices"])
 def test_sim_publishes_exactly_the_cell_files_topics(roscore, start_sim, cell: Path, expected: dict[str, str]):

@@ -225,6 +225,31 @@ test('modules: a role launches and stops only the modules whose roles list it, a
   assert.ok(audit.entries.some((e) => e.outcome === 'denied' && /Vision/.test(e.detail)));
 });
 
+test('inspect: a role with the page reads the log, the graph and the rates; only echo_roles read a topic\'s last message; a role without the page reads none of it', () => {
+  const c = { ...cell, inspect: { echo_roles: ['engineer'] }, roles: { engineer: { pages: ['inspect'] }, viewer: { pages: ['inspect'] }, operator: { pages: ['home'] } } };
+  const grants = new Map(Object.keys(c.roles).map((r) => [r, grantsFor(c, FEATURES, r)]));
+  const audit = { entries: [], record(e) { this.entries.push(e); } };
+  const guard = createOpGuard({ grantsOf: (r) => grants.get(r), motion: motionNames(c, FEATURES), lease: new ControlLease(), audit, checkArgs: argumentChecks(c, FEATURES) });
+  const ctx = (role) => ({ session: { username: role, role, sid: role }, ip: '127.0.0.1', rosapiCalls: new Map(), lastPublishAudit: new Map() });
+  const call = (role, service) => guard.inspect(ctx(role), Buffer.from(JSON.stringify({ op: 'call_service', id: 'x', service, args: { topic: '/joint_states' } })), false);
+  const rows = [
+    // service,                      engineer, viewer, operator
+    ['/cell/inspect/log', true, true, false],
+    ['/cell/inspect/graph', true, true, false],
+    ['/cell/inspect/topic_stats', true, true, false],
+    ['/cell/inspect/echo', true, false, false],
+  ];
+  for (const [service, ...allowed] of rows) {
+    ['engineer', 'viewer', 'operator'].forEach((role, i) => assert.equal(call(role, service).forward, allowed[i], `${role} ${service}`));
+  }
+  assert.match(JSON.parse(String(call('viewer', '/cell/inspect/echo').replies[0].data)).msg, /viewer role may not read a topic's messages here/);
+  assert.equal(configFor(c, FEATURES, 'engineer').features.inspect.can_echo, true);
+  assert.equal(configFor(c, FEATURES, 'viewer').features.inspect.can_echo, false);
+  assert.ok(audit.entries.some((e) => e.outcome === 'denied' && e.target === '/cell/inspect/echo'));
+  const inspect = FEATURES.find((f) => f.id === 'inspect');
+  assert.deepEqual(inspect?.check?.({ echo_roles: ['engineer', 'boss'] }, c), ['inspect.echo_roles[1]: no role "boss" in roles']);
+});
+
 /** The demo cell with two motion groups (as config/twin-arm-cell.yaml has): a tool on each. */
 function twoGroupCell() {
   const joints = (p) => cell.manual.groups[0].joints.map((j) => `${p}_${j}`);

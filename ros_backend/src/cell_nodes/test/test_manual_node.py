@@ -140,3 +140,21 @@ def test_preview_move_through_ros(node) -> None:
     r = preview(group="arm", kind="jump")
     assert (r.reachable, r.message, list(r.positions)) == (False, "unknown move kind 'jump' (named, relative or pose)",
                                                           [])
+
+
+def test_the_driver_reports_its_controller_link_and_joint_state_rate_on_diagnostics(node) -> None:
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+    diag = Latest("/diagnostics", DiagnosticArray)
+    try:
+        def mine():
+            return next((s for s in diag.msg.status if s.name == "manual_test: arm controller"), None) \
+                if diag.msg else None
+        # The first report after a second of joint states (the rate is over the last 2 s).
+        wait_for(lambda: mine() is not None and float(dict((kv.key, kv.value) for kv in mine().values)
+                                                      ["joint states (Hz)"]) > 60, 5, what="the driver's diagnostics")
+        s = mine()
+        values = {kv.key: kv.value for kv in s.values}
+        assert (s.level, s.message) == (DiagnosticStatus.OK, "connected")
+        assert values["controller"] == HOST and values["safety mode"] == "NORMAL" and values["expected (Hz)"] == "125"
+    finally:
+        diag.sub.unregister()

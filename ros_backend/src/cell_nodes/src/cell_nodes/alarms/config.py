@@ -13,6 +13,15 @@ SEVERITIES = {"info": INFO, "warning": WARNING, "error": ERROR}
 WRENCH_TYPE = "geometry_msgs/WrenchStamped"
 
 
+@dataclass(frozen=True)
+class DiagRule:
+    """Which diagnostics statuses raise alarms (name glob) and how severe, per level (None: no alarm)."""
+    match: str
+    warn: Optional[int] = WARNING
+    error: Optional[int] = ERROR
+    stale: Optional[int] = WARNING
+
+
 class ConfigError(ValueError):
     """The alarms section cannot be used (names the field: `alarms.force_limit_n: ...`)."""
 
@@ -41,6 +50,9 @@ class AlarmsConfig:
     mode_topic: str = "/cell/mode"
     set_mode_service: str = "/cell/set_mode"
     publish_period_s: float = 1.0
+    diagnostics_topic: Optional[str] = None       # diagnostic_msgs/DiagnosticArray; None: no diagnostics alarms
+    diagnostics_stale_s: float = 5.0
+    diagnostics_rules: tuple[DiagRule, ...] = ()  # first match wins; a status no rule matches raises nothing
 
     @property
     def robot_groups(self) -> tuple[str, ...]:
@@ -140,6 +152,9 @@ def parse_alarms(cell: Mapping[str, Any]) -> AlarmsConfig:
     sev.sort(key=lambda p: any(ch in p[0] for ch in "*?["))
     kw["severity"] = tuple(sev)
 
+    if section.get("diagnostics") is not None:
+        kw.update(_diagnostics(section["diagnostics"]))
+
     mode = cell.get("operation_mode") or {}
     wanted = section.get("alarm_mode", "alarm")
     if wanted is not None and not isinstance(wanted, str):
@@ -150,6 +165,31 @@ def parse_alarms(cell: Mapping[str, Any]) -> AlarmsConfig:
     kw["mode_topic"] = mode.get("topic", "/cell/mode")
     kw["set_mode_service"] = mode.get("set_service", "/cell/set_mode")
     return AlarmsConfig(**kw)
+
+
+def _diagnostics(d: Any) -> dict[str, Any]:
+    where = "alarms.diagnostics"
+    if not isinstance(d, Mapping):
+        raise ConfigError(f"{where}: expected a mapping (topic, stale_s, rules), got {d!r}")
+    rules_in = d.get("rules") or []
+    if not isinstance(rules_in, list):
+        raise ConfigError(f"{where}.rules: expected a list of rules, got {rules_in!r}")
+    levels = {**SEVERITIES, "none": None}
+    rules = []
+    for i, r in enumerate(rules_in):
+        if not isinstance(r, Mapping) or not isinstance(r.get("match"), str) or not r["match"]:
+            raise ConfigError(f"{where}.rules[{i}].match: a rule needs a status name or glob, got {r!r}")
+        kw: dict[str, Any] = {"match": r["match"]}
+        for level in ("warn", "error", "stale"):
+            if level in r:
+                if r[level] not in levels:
+                    raise ConfigError(f"{where}.rules[{i}].{level}: expected one of info, warning, error, none, "
+                                      f"got {r[level]!r}")
+                kw[level] = levels[r[level]]
+        rules.append(DiagRule(**kw))
+    return {"diagnostics_topic": _topic(d.get("topic", "/diagnostics"), f"{where}.topic"),
+            "diagnostics_stale_s": _number(d.get("stale_s", 5.0), f"{where}.stale_s"),
+            "diagnostics_rules": tuple(rules)}
 
 
 def alarm_mode_problem(cell: Mapping[str, Any]) -> Optional[str]:

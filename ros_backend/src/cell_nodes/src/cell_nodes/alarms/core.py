@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from typing import Any, Iterable, Mapping, Optional
 
+from ..diagnostics import DiagnosticsTracker, statuses_of
 from .config import AlarmsConfig, default_robot_state_topic
 from .mode import ModeKeeper, ModeRequest, memory_problem
-from .sources import (ForceWatch, RobotInfo, SilenceWatch, combined_robot, fault_conditions, module_conditions,
-                      robot_alarm_id, robot_conditions, robot_text, wrench_force)
+from .sources import (ForceWatch, RobotInfo, SilenceWatch, combined_robot, diagnostic_conditions, fault_conditions,
+                      field, module_conditions, robot_alarm_id, robot_conditions, robot_text, wrench_force)
 from .status import SafetyStatus, overall
 from .table import ERROR, WARNING, Alarm, AlarmTable, Condition
 
@@ -49,6 +50,8 @@ class Alarms:
         # the start-up grace is over, when the silent ones are alarms), the remembered mode is not given back.
         self._holding = False
         self._unheard: set[str] = set()
+        self._diagnostics = DiagnosticsTracker(config.diagnostics_stale_s)
+        self._stopped_nodes: set[str] = set()   # the nodes of modules that are inactive (stopped on purpose)
 
     # ------------------------------------------------------------------------------------------ inputs
     def _report(self, key: str, conditions: Iterable[Condition], now: float) -> bool:
@@ -107,9 +110,28 @@ class Alarms:
         return changed
 
     def on_modules(self, modules: Iterable[Any], now: float) -> bool:
-        """cell_msgs/ModuleStates.modules (name, state) from the modules node."""
+        """cell_msgs/ModuleStates.modules (name, state, nodes) from the modules node."""
+        modules = list(modules)
         self._unheard.discard("modules")
-        return self._report("modules", module_conditions(modules), now)
+        changed = self._report("modules", module_conditions(modules), now)
+        # A module stopped on purpose (inactive) leaves no stale diagnostics behind: its nodes' statuses go.
+        self._stopped_nodes = {n for m in modules if field(m, "state") == "inactive" for n in field(m, "nodes") or []}
+        if self._stopped_nodes and self._diagnostics.forget_nodes(self._stopped_nodes):
+            changed |= self._diagnostics_report(now)
+        return changed
+
+    def on_diagnostics(self, array: Any, node: str, now: float) -> bool:
+        """diagnostic_msgs/DiagnosticArray from `node` (the publisher's name, from the connection header)."""
+        if node in self._stopped_nodes:
+            return False  # a last report while its module is being stopped
+        self._diagnostics.add(statuses_of(array, node, now))
+        return self._diagnostics_report(now)
+
+    def _diagnostics_report(self, now: float) -> bool:
+        if not self.config.diagnostics_rules:
+            return False
+        return self._report("diagnostics", diagnostic_conditions(
+            self._diagnostics.current(now), self.config.diagnostics_rules, self.config.diagnostics_stale_s), now)
 
     def tick(self, now: float) -> bool:
         """Periodic: sources that fell silent, and the active alarms' last-seen time."""
@@ -125,6 +147,7 @@ class Alarms:
                     "force.no_data" + self._force_suffix(topic),
                     f"no wrist force reading on {topic} for {self.config.timeout_s:g} s: the force limit is not "
                     f"supervised", WARNING, "force")], now)
+        changed |= self._diagnostics_report(now)   # statuses that fell silent become stale
         self.table.touch(now)
         return changed
 

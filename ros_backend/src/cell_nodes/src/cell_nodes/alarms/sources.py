@@ -2,10 +2,12 @@
 tests feed plain dicts and the node the ROS messages (no message class is imported here)."""
 from __future__ import annotations
 
+import fnmatch
 import math
 from dataclasses import dataclass
 from typing import Any, Iterable, Optional, Sequence
 
+from ..diagnostics import ERROR as D_ERROR, STALE as D_STALE, WARN as D_WARN
 from .table import ERROR, INFO, WARNING, Condition
 
 
@@ -200,3 +202,29 @@ class SilenceWatch:
         if self.last is None:
             return self.expected_since is not None and now - self.expected_since > self.grace
         return now - self.last > self.timeout
+
+
+# ---------------------------------------------------------------------------------------------- diagnostics
+# Alarm ids are `diagnostics.<name>` with the status name made an id (lower case, runs of other characters as "_").
+def diagnostics_alarm_id(name: str) -> str:
+    slug = "".join(ch if ch.isalnum() else "_" for ch in name.lower())
+    return "diagnostics." + "_".join(p for p in slug.split("_") if p)
+
+
+def diagnostic_conditions(statuses: Iterable[Any], rules: Sequence[Any], stale_s: float) -> list[Condition]:
+    """The conditions of the current statuses (cell_nodes.diagnostics DiagStatus, STALE applied) under the cell
+    file's rules (alarms.config DiagRule): the first rule whose glob matches a name decides; OK raises nothing."""
+    out = []
+    for s in statuses:
+        rule = next((r for r in rules if fnmatch.fnmatchcase(s.name, r.match)), None)
+        if rule is None:
+            continue
+        severity = {D_WARN: rule.warn, D_ERROR: rule.error, D_STALE: rule.stale}.get(s.level)
+        if severity is None:
+            continue
+        if s.level == D_STALE:
+            text = f"{s.name}: no report for {stale_s:g} s (stale; last: {s.message or 'no message'})"
+        else:
+            text = f"{s.name}: {s.message or ('warning' if s.level == D_WARN else 'error')}"
+        out.append(Condition(diagnostics_alarm_id(s.name), text, severity, "diagnostics"))
+    return out

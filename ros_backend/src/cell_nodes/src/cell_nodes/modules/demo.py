@@ -6,6 +6,8 @@ import io
 import os
 from typing import Any, Mapping, Optional
 
+from ..diagnostics import OK, WARN, DiagStatus, status as diag_status
+
 DARK = 0.15      # mean brightness (0..1) under which the workbench counts as dark
 BRIGHT = 0.9     # over which it counts as overexposed
 STALE_S = 3.0    # no brightness for this long: "no image"
@@ -29,6 +31,20 @@ def vision_status(brightness: Optional[float], age_s: float) -> str:
     if brightness > BRIGHT:
         return "overexposed"
     return "ok"
+
+
+def vision_diagnostic(verdict: str, brightness: Optional[float], age_s: float, topic: str) -> DiagStatus:
+    """The vision monitor's status on /diagnostics: OK while the verdict is "ok", else WARN with the verdict."""
+    values = [("brightness", "-" if brightness is None else f"{brightness:.2f}"),
+              ("last brightness (s ago)", "-" if brightness is None else f"{age_s:.1f}"), ("topic", topic)]
+    return diag_status("vision: camera brightness", OK if verdict == "ok" else WARN, verdict, values)
+
+
+def load_diagnostic(load: float) -> DiagStatus:
+    """The system monitor's status: WARN above 0.9 per core."""
+    return diag_status("system_monitor: CPU load", WARN if load > 0.9 else OK,
+                       f"high load: {load:.2f} per core" if load > 0.9 else "normal",
+                       [("load per core (1 min)", f"{load:.2f}"), ("cores", os.cpu_count() or 1)])
 
 
 def stream_topic(cell: Mapping[str, Any], stream: str) -> str:

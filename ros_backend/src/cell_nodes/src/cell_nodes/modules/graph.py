@@ -56,8 +56,9 @@ def _refused(e: BaseException) -> bool:
 
 class MasterGraph:
     def __init__(self, master_uri: str, caller_id: str, ping_timeout: float = 1.0, master_timeout: float = 2.0,
-                 workers: int = 8) -> None:
+                 workers: int = 8, clean_up: bool = True) -> None:
         self.master_uri = master_uri
+        self.clean_up = clean_up  # False: only look (the Inspect page's graph changes nothing)
         self.caller_id = caller_id
         self.ping_timeout = ping_timeout
         self.master_timeout = master_timeout
@@ -80,6 +81,9 @@ class MasterGraph:
 
     def system_state(self) -> list[Any]:
         return self._master("getSystemState")
+
+    def topic_types(self) -> list[Any]:
+        return self._master("getTopicTypes")
 
     def lookup(self, node: str) -> Optional[str]:
         try:
@@ -112,7 +116,7 @@ class MasterGraph:
         wanted = [n for n in dict.fromkeys(nodes) if n in registered]
         results = list(self._pool.map(self._ping, wanted))
         for node, uri, verdict in results:
-            if verdict == "dead" and uri:
+            if verdict == "dead" and uri and self.clean_up:
                 self._unregister(node, uri, state)
         return {node for node, _uri, verdict in results if verdict == "alive"}
 
