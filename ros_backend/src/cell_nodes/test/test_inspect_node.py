@@ -130,6 +130,12 @@ def test_a_topic_measures_its_rate_and_echoes_its_last_message_while_asked(rate_
     assert e.ok and e.type == "geometry_msgs/PointStamped" and 0 <= e.age_s < 1
     tree = json.loads(e.json)
     assert tree["header"]["frame_id"] == "base" and tree["point"]["x"] > 0 and tree["point"]["y"] == 0
+    # A topic the inspect node itself reads typed (rospy shares the subscription): measured and echoed all the same.
+    wait_for(lambda: stats(topic="/rosout_agg").messages > 0 or rospy.loginfo("inspect test: tick") or False, 10,
+             what="/rosout_agg measured")
+    assert stats(topic="/rosout_agg").type == "rosgraph_msgs/Log" and stats(topic="/rosout_agg").mean_bytes > 0
+    agg = echo(topic="/rosout_agg")
+    assert agg.ok and "msg" in json.loads(agg.json), agg.message
     bad = stats(topic="not a topic")
     assert not bad.ok and "is not a global topic name" in bad.message
     quiet = echo(topic=f"/{TAG}/nobody")

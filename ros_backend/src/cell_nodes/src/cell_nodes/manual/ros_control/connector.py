@@ -11,8 +11,10 @@ from ..config import RosControlSpec
 from .arm import STATE_TIMEOUT, RosControlArm, Transport, Unreachable, load_kinematics
 
 # s to wait at connect for the trajectory controller once the joint states are there: its action server's status
-# comes at 5 Hz and the action client connects a moment after the joint states subscription.
-CONTROLLER_TIMEOUT = 1.0
+# comes at 5 Hz and the action client connects a moment after the joint states subscription. 3 s: on a loaded
+# 2-core CI host, after the driver's process was frozen and let go, 1 s once passed before its status came (a
+# CONTROLLER_NOT_RUNNING blip, an error alarm). A controller that really is not running is reported after it.
+CONTROLLER_TIMEOUT = 3.0
 
 
 class RosControlConnector:
