@@ -1,11 +1,17 @@
 /**
- * The inspect feature's plain logic (no Svelte): the ROS names, the log levels, and everything the ROS log card
- * computes: one entry shape from both sources, the merge of the history with the live log, the filters, the texts,
- * the export. Tests import it directly.
+ * The inspect feature's plain logic (no Svelte): the ROS names, the views (tabs), the log levels, and everything
+ * the ROS log card computes: one entry shape from both sources, the merge of the history with the live log, the
+ * filters, the texts, the export. The Topics and Nodes views' logic (the graph, filters, measured figures, the last
+ * message as a tree) is in the second half, the Diagnostics view's (levels, the tree, sorting, filters) at the end.
+ * Tests import it directly.
  *
  * ROS: /cell/inspect/log (cell_msgs/LogQuery: the robot PC's recent /rosout_agg, filtered, oldest first) and
- * /rosout_agg (rosgraph_msgs/Log) live. The cell file's section (/api/config features.inspect):
- * { log_keep_entries, log_keep_s }, what the inspect node keeps.
+ * /rosout_agg (rosgraph_msgs/Log) live; /cell/inspect/graph (topics and nodes), /cell/inspect/topic_stats (a topic's
+ * rate and bandwidth, measured while asked), /cell/inspect/echo (a topic's last message as JSON) and
+ * /cell/inspect/diagnostics (diagnostic_msgs/DiagnosticArray, latched, ~1 Hz: every status heard on /diagnostics, the
+ * silent ones marked STALE). The cell file's
+ * section (/api/config features.inspect): { log_keep_entries, log_keep_s, can_echo } (can_echo: this role may read
+ * any topic's last message).
  */
 
 export const FEATURE_ID = 'inspect';
@@ -13,6 +19,10 @@ export const FEATURE_ID = 'inspect';
 export const NAMES = Object.freeze({
   log: { service: '/cell/inspect/log', type: 'cell_msgs/LogQuery' },
   rosout: { topic: '/rosout_agg', type: 'rosgraph_msgs/Log' },
+  graph: { service: '/cell/inspect/graph', type: 'cell_msgs/GetRosGraph' },
+  topicStats: { service: '/cell/inspect/topic_stats', type: 'cell_msgs/TopicStats' },
+  echo: { service: '/cell/inspect/echo', type: 'cell_msgs/TopicEcho' },
+  diagnostics: { topic: '/cell/inspect/diagnostics', type: 'diagnostic_msgs/DiagnosticArray' },
 });
 
 /** Entries the page keeps (the oldest go first). */
@@ -304,15 +314,26 @@ export function shownText(shown, matching, total) {
 export const newEntriesText = (n) => `${count(n, 'new entry', 'new entries')}`;
 
 /**
- * Why the log is not live, as a title and a sentence (null when it is live).
- * @param {'offline' | 'disconnected' | null} why @returns {{ title: string, text: string } | null}
+ * Why the view is not live, as a title and a sentence (null when it is live): the log's, the graph's (Topics and
+ * Nodes: what is shown is the last graph read, and measuring stops) or the diagnostics' (the last array received).
+ * @param {'offline' | 'disconnected' | null} why @param {'log' | 'graph' | 'diagnostics'} [what]
+ * @returns {{ title: string, text: string } | null}
  */
-export function notLiveView(why) {
-  if (why === 'offline') return { title: 'Offline', text: 'the log is not live. New entries appear again once the server answers.' };
-  if (why === 'disconnected') {
-    return { title: 'ROS disconnected', text: 'the log is not live. New entries appear again once reconnected, with the history missed meanwhile.' };
+export function notLiveView(why, what = 'log') {
+  if (!why) return null;
+  const title = why === 'offline' ? 'Offline' : 'ROS disconnected';
+  if (what === 'diagnostics') {
+    return { title, text: why === 'offline'
+      ? 'the diagnostics shown may be out of date. They update again once the server answers.'
+      : 'the diagnostics shown may be out of date. They update again once reconnected.' };
   }
-  return null;
+  if (what === 'graph') {
+    return { title, text: why === 'offline'
+      ? 'the topics and nodes shown may be out of date. They are read again once the server answers.'
+      : 'the topics and nodes shown may be out of date, and nothing is measured. They are read again once reconnected.' };
+  }
+  if (why === 'offline') return { title, text: 'the log is not live. New entries appear again once the server answers.' };
+  return { title, text: 'the log is not live. New entries appear again once reconnected, with the history missed meanwhile.' };
 }
 
 // ---- export ----
@@ -339,4 +360,501 @@ export const exportText = (entries) => entries.map((e) => `${exportLine(e)}\n`).
 export function exportFileName(nowMs) {
   const iso = new Date(nowMs).toISOString(); // 2026-11-26T14:05:12.123Z
   return `ros-log-${iso.slice(0, 19).replace(/[-:]/g, '')}Z.log`;
+}
+
+// ---- the views (tabs) ----
+
+/** @typedef {'log' | 'topics' | 'nodes' | 'diagnostics'} TabId */
+
+/** The page's views, in the tab list's order. */
+export const TABS = /** @type {readonly { id: TabId, label: string }[]} */ (Object.freeze([
+  { id: 'log', label: 'Log' },
+  { id: 'topics', label: 'Topics' },
+  { id: 'nodes', label: 'Nodes' },
+  { id: 'diagnostics', label: 'Diagnostics' },
+]));
+
+/** A view's id from anything (a URL, storage); the log when unknown. @param {any} v @returns {TabId} */
+export const tabId = (v) => TABS.find((t) => t.id === v)?.id ?? 'log';
+
+/**
+ * The tab a key moves to in the tab list (the WAI-ARIA tabs pattern: arrows wrap, Home the first, End the last);
+ * null for any other key.
+ * @param {TabId} current @param {string} key @returns {TabId | null}
+ */
+export function tabAfterKey(current, key) {
+  const i = TABS.findIndex((t) => t.id === current);
+  const n = TABS.length;
+  if (key === 'ArrowRight') return TABS[(i + 1) % n].id;
+  if (key === 'ArrowLeft') return TABS[(i - 1 + n) % n].id;
+  if (key === 'Home') return TABS[0].id;
+  if (key === 'End') return TABS[n - 1].id;
+  return null;
+}
+
+// ---- the graph (Topics and Nodes) ----
+
+/** The graph is read again this often while Topics or Nodes is shown. */
+export const GRAPH_POLL_MS = 5000;
+/** A shown topic's figures are asked for this often (the robot PC measures while asked at least every 10 s). */
+export const STATS_POLL_MS = 1000;
+/** The last message is asked for this often while shown. */
+export const ECHO_POLL_MS = 2000;
+/** The master pings every node (up to 1 s each): the graph may take a while on a big cell. */
+export const GRAPH_TIMEOUT_MS = 10000;
+export const STATS_TIMEOUT_MS = 5000;
+export const ECHO_TIMEOUT_MS = 5000;
+/** A topic with nothing received after this long reads "no messages" instead of "measuring…". */
+export const NO_MESSAGES_AFTER_S = 3;
+/** The robot PC's measuring window (cell_msgs/TopicStats window_s reaches it 10 s after measuring starts). */
+export const STATS_WINDOW_S = 10;
+
+/**
+ * One topic as the master knows it (cell_msgs/TopicInfo).
+ * @typedef {object} TopicInfo
+ * @property {string} name
+ * @property {string} type  '' when the master knows no type for it
+ * @property {string[]} publishers  node names
+ * @property {string[]} subscribers  node names
+ */
+
+/**
+ * One node of the graph (cell_msgs/NodeInfo).
+ * @typedef {object} NodeInfo
+ * @property {string} name
+ * @property {boolean} alive  answered a ping just now
+ * @property {string} module  the cell file's module that lists it ('' none)
+ * @property {string[]} publications
+ * @property {string[]} subscriptions
+ * @property {string[]} services
+ */
+
+/** @param {any} a @returns {string[]} */
+const strings = (a) => (Array.isArray(a) ? a.filter((x) => typeof x === 'string') : []);
+/** @param {{ name: string }} a @param {{ name: string }} b */
+const byName = (a, b) => (a.name < b.name ? -1 : a.name > b.name ? 1 : 0);
+
+/**
+ * The graph service's answer in the page's shape: every field present and of its type, entries without a name left
+ * out, each list sorted by name (the service sorts too; the page does not depend on it).
+ * @param {any} r @returns {{ topics: TopicInfo[], nodes: NodeInfo[] }}
+ */
+export function normaliseGraph(r) {
+  const topics = (Array.isArray(r?.topics) ? r.topics : [])
+    .map((/** @type {any} */ t) => ({ name: str(t?.name), type: str(t?.type), publishers: strings(t?.publishers), subscribers: strings(t?.subscribers) }))
+    .filter((/** @type {TopicInfo} */ t) => t.name);
+  const nodes = (Array.isArray(r?.nodes) ? r.nodes : [])
+    .map((/** @type {any} */ n) => ({
+      name: str(n?.name), alive: n?.alive === true, module: str(n?.module),
+      publications: strings(n?.publications), subscriptions: strings(n?.subscriptions), services: strings(n?.services),
+    }))
+    .filter((/** @type {NodeInfo} */ n) => n.name);
+  return { topics: topics.sort(byName), nodes: nodes.sort(byName) };
+}
+
+/** The filter's words, lower case ("joint states" matches "/joint_states" only when both words are in it). @param {string} text */
+const words = (text) => String(text ?? '').toLowerCase().split(/\s+/).filter(Boolean);
+
+/**
+ * The topics whose name or type contains every word of `text` (any case; '' all). Order kept.
+ * @param {TopicInfo[]} topics @param {string} text @returns {TopicInfo[]}
+ */
+export function filterTopics(topics, text) {
+  const w = words(text);
+  if (!w.length) return topics;
+  return topics.filter((t) => {
+    const hay = `${t.name} ${t.type}`.toLowerCase();
+    return w.every((x) => hay.includes(x));
+  });
+}
+
+/**
+ * The nodes whose name or module contains every word of `text` (any case; '' all). Order kept.
+ * @param {NodeInfo[]} nodes @param {string} text @returns {NodeInfo[]}
+ */
+export function filterNodes(nodes, text) {
+  const w = words(text);
+  if (!w.length) return nodes;
+  return nodes.filter((n) => {
+    const hay = `${n.name} ${n.module}`.toLowerCase();
+    return w.every((x) => hay.includes(x));
+  });
+}
+
+/** "2 pub · 1 sub". @param {TopicInfo} t */
+export const pubSubText = (t) => `${t.publishers.length} pub · ${t.subscribers.length} sub`;
+
+/**
+ * The count above a list: "12 topics", "3 of 12 topics" when the filter hides some.
+ * @param {number} shown @param {number} total @param {string} one @param {string} [many]
+ */
+export const countText = (shown, total, one, many = `${one}s`) =>
+  (shown < total ? `${shown} of ${count(total, one, many)}` : count(total, one, many));
+
+/**
+ * The Nodes view's count: "12 nodes · 1 not responding" (of all nodes, whatever the filter shows).
+ * @param {NodeInfo[]} shown @param {NodeInfo[]} all
+ */
+export function nodeCountText(shown, all) {
+  const dead = all.filter((n) => !n.alive).length;
+  const base = countText(shown.length, all.length, 'node');
+  return dead ? `${base} · ${dead} not responding` : base;
+}
+
+/** A node's state as text (never colour alone). @param {NodeInfo} n */
+export const aliveText = (n) => (n.alive ? 'alive' : 'not responding');
+
+// ---- a topic's measured figures ----
+
+/**
+ * cell_msgs/TopicStats' response.
+ * @typedef {object} TopicStats
+ * @property {boolean} ok
+ * @property {string} message
+ * @property {string} type
+ * @property {number} messages  received in the window
+ * @property {number} window_s
+ * @property {number} rate_hz
+ * @property {number} bandwidth_bps  bytes per second
+ * @property {number} mean_bytes
+ * @property {number} last_age_s  -1: none received yet
+ */
+
+/** @param {any} v */
+const num = (v) => (typeof v === 'number' && Number.isFinite(v) ? v : Number(v) || 0);
+
+/** The service's answer with every figure a number. @param {any} r @returns {TopicStats} */
+export function normaliseStats(r) {
+  // A missing age is "none yet", not 0 s (Number(null) is 0).
+  const age = typeof r?.last_age_s === 'number' ? r.last_age_s : typeof r?.last_age_s === 'string' && r.last_age_s.trim() ? Number(r.last_age_s) : -1;
+  return {
+    ok: r?.ok === true, message: str(r?.message), type: str(r?.type),
+    messages: Math.max(0, Math.trunc(num(r?.messages))), window_s: Math.max(0, num(r?.window_s)),
+    rate_hz: Math.max(0, num(r?.rate_hz)), bandwidth_bps: Math.max(0, num(r?.bandwidth_bps)),
+    mean_bytes: Math.max(0, num(r?.mean_bytes)), last_age_s: Number.isFinite(age) && age >= 0 ? age : -1,
+  };
+}
+
+/**
+ * A rate as rostopic hz would read it, about four figures: "124.8 Hz", "9.98 Hz", "0.500 Hz", "1500 Hz".
+ * @param {number} hz
+ */
+export function formatRate(hz) {
+  if (typeof hz !== 'number' || !Number.isFinite(hz) || hz < 0) return '—';
+  if (hz >= 999.95) return `${Math.round(hz)} Hz`;
+  if (hz >= 9.995) return `${hz.toFixed(1)} Hz`;
+  if (hz >= 0.9995) return `${hz.toFixed(2)} Hz`;
+  return `${hz.toFixed(3)} Hz`;
+}
+
+const BYTE_UNITS = ['B', 'KB', 'MB', 'GB', 'TB'];
+
+/** A size in bytes, decimal units as rostopic bw: "850 B", "12.3 KB", "123 KB", "1.5 MB". @param {number} n */
+export function formatBytes(n) {
+  if (typeof n !== 'number' || !Number.isFinite(n) || n < 0) return '—';
+  let v = n;
+  let i = 0;
+  while (v >= 999.5 && i < BYTE_UNITS.length - 1) {
+    v /= 1000;
+    i++;
+  }
+  const figure = i === 0 ? String(Math.round(v)) : v < 99.95 ? v.toFixed(1) : String(Math.round(v));
+  return `${figure} ${BYTE_UNITS[i]}`;
+}
+
+/** "12.3 KB/s". @param {number} bps bytes per second */
+export const formatBandwidth = (bps) => (formatBytes(bps) === '—' ? '—' : `${formatBytes(bps)}/s`);
+
+/**
+ * What the Rate says: the rate once two messages came in the window; "measuring…" before; "no messages" when nothing
+ * came after NO_MESSAGES_AFTER_S; for a slow or latched topic, once the window is full, how many came in it.
+ * @param {TopicStats | null} s @param {number} elapsedS  since this page began asking
+ */
+export function rateText(s, elapsedS) {
+  if (!s) return 'measuring…';
+  if (!s.ok) return '—';
+  if (s.messages >= 2) return formatRate(s.rate_hz);
+  // Another page may have started measuring earlier: the window says how long the robot PC has been listening.
+  const listened = Math.max(elapsedS, s.window_s);
+  if (s.last_age_s < 0) return listened >= NO_MESSAGES_AFTER_S ? 'no messages' : 'measuring…';
+  if (s.window_s >= STATS_WINDOW_S - 0.5) {
+    const w = Math.round(s.window_s);
+    return s.messages === 1 ? `1 message in the last ${w} s` : `no messages in the last ${w} s`;
+  }
+  return 'measuring…';
+}
+
+/**
+ * What the Bandwidth says: bytes per second once a message came in the window.
+ * @param {TopicStats | null} s @param {number} elapsedS
+ */
+export function bandwidthText(s, elapsedS) {
+  if (!s) return 'measuring…';
+  if (!s.ok) return '—';
+  if (s.messages >= 1) return formatBandwidth(s.bandwidth_bps);
+  if (s.last_age_s < 0) return Math.max(elapsedS, s.window_s) >= NO_MESSAGES_AFTER_S ? 'no messages' : 'measuring…';
+  return formatBandwidth(0);
+}
+
+/** The mean message size, "—" before any. @param {TopicStats | null} s */
+export const meanSizeText = (s) => (s?.ok && s.messages >= 1 ? formatBytes(s.mean_bytes) : '—');
+
+/**
+ * How long ago a message came: "35 ms ago", "2.5 s ago", "3 min ago", "none received yet" (-1).
+ * @param {number} ageS
+ */
+export function ageText(ageS) {
+  if (typeof ageS !== 'number' || !Number.isFinite(ageS) || ageS < 0) return 'none received yet';
+  if (ageS < 1) return `${Math.round(ageS * 1000)} ms ago`;
+  if (ageS < 59.95) return `${ageS.toFixed(1)} s ago`;
+  const min = Math.floor(ageS / 60);
+  if (min < 120) return `${min} min ago`;
+  return `${Math.floor(min / 60)} h ago`;
+}
+
+/** Under the figures: "Over the last 10 s (as rostopic hz and bw)". @param {TopicStats | null} s */
+export const windowText = (s) => (s?.ok && s.window_s > 0 ? `Over the last ${spanText(s.window_s)}` : '');
+
+// ---- a topic's last message (echo) as a tree ----
+
+/**
+ * cell_msgs/TopicEcho's response.
+ * @typedef {{ ok: boolean, message: string, type: string, json: string, age_s: number }} EchoAnswer
+ */
+
+/** The echo service's answer with every field of its type (age -1 when none). @param {any} r @returns {EchoAnswer} */
+export function normaliseEcho(r) {
+  const age = typeof r?.age_s === 'number' && Number.isFinite(r.age_s) && r.age_s >= 0 ? r.age_s : -1;
+  return { ok: r?.ok === true, message: str(r?.message), type: str(r?.type), json: str(r?.json), age_s: age };
+}
+
+/**
+ * The echo's JSON text, parsed; the raw text when it is not JSON (the page shows it as it came).
+ * @param {any} json @returns {{ parsed: true, value: any } | { parsed: false, raw: string, error: string }}
+ */
+export function parseEcho(json) {
+  const raw = typeof json === 'string' ? json : json === null || json === undefined ? '' : String(json);
+  if (!raw.trim()) return { parsed: false, raw, error: 'empty' };
+  try {
+    return { parsed: true, value: JSON.parse(raw) };
+  } catch (e) {
+    return { parsed: false, raw, error: e instanceof Error ? e.message : String(e) };
+  }
+}
+
+/** @typedef {'object' | 'array' | 'string' | 'number' | 'boolean' | 'null'} JsonKind */
+
+/** @param {any} v @returns {JsonKind} */
+export function jsonKind(v) {
+  if (v === null || v === undefined) return 'null';
+  if (Array.isArray(v)) return 'array';
+  const t = typeof v;
+  return t === 'object' ? 'object' : t === 'number' ? 'number' : t === 'boolean' ? 'boolean' : 'string';
+}
+
+/** A branch's children: an array's items by index, an object's fields in their order. @param {any} v */
+export function jsonChildren(v) {
+  if (Array.isArray(v)) return v.map((value, i) => ({ key: String(i), value }));
+  if (v && typeof v === 'object') return Object.entries(v).map(([key, value]) => ({ key, value }));
+  return [];
+}
+
+/** The robot PC's last item of a cut array: "… 97 more (100 items)" (or "... 97 more (100 items)"). */
+const CUT_ITEM = /^(?:…|\.\.\.)\s*(\d+) more \((\d+) items?\)$/;
+
+/**
+ * An array the robot PC cut: how many items it had and how many came (null when not cut).
+ * @param {any[]} a @returns {{ total: number, shown: number } | null}
+ */
+export function cutArray(a) {
+  const last = a.length ? a[a.length - 1] : null;
+  const m = typeof last === 'string' ? CUT_ITEM.exec(last.trim()) : null;
+  return m ? { total: Number(m[2]), shown: a.length - 1 } : null;
+}
+
+/** A branch's summary: "[100 items, first 16 shown]", "[3 items]", "{2 fields}". @param {any} v */
+export function jsonSummary(v) {
+  if (Array.isArray(v)) {
+    const cut = cutArray(v);
+    if (cut) return `[${count(cut.total, 'item')}, first ${cut.shown} shown]`;
+    return `[${count(v.length, 'item')}]`;
+  }
+  if (v && typeof v === 'object') return `{${count(Object.keys(v).length, 'field')}}`;
+  return '';
+}
+
+/** A leaf as JSON writes it: strings quoted, null, numbers, booleans. @param {any} v */
+export function jsonScalarText(v) {
+  if (v === null || v === undefined) return 'null';
+  if (typeof v === 'string') return JSON.stringify(v);
+  return String(v);
+}
+
+// ---- diagnostics (the diagnostics aggregator's status tree) ----
+
+/** A latched ~1 Hz array: nothing for this long means the robot PC stopped sending ("no update for N s"). */
+export const DIAG_NO_UPDATE_S = 3;
+
+/** @typedef {'ok' | 'warn' | 'error' | 'stale'} DiagLevelName */
+/** @typedef {'ok' | 'warn' | 'danger' | 'neutral'} DiagTone */
+/**
+ * @typedef {object} DiagLevel
+ * @property {DiagLevelName} name
+ * @property {number} value  diagnostic_msgs/DiagnosticStatus' level
+ * @property {string} upper  what the row says ("OK", "WARN", "ERROR", "STALE")
+ * @property {number} rank  how bad, for "worst first" (higher is worse)
+ * @property {DiagTone} tone
+ */
+
+/**
+ * diagnostic_msgs/DiagnosticStatus' levels. Worst first means error, then stale, then warn: an error is a known fault,
+ * a stale status may hide one (its reporter went silent), a warning is a known lesser problem.
+ */
+export const DIAG_LEVELS = /** @type {readonly DiagLevel[]} */ (Object.freeze([
+  { name: 'ok', value: 0, upper: 'OK', rank: 0, tone: 'ok' },
+  { name: 'warn', value: 1, upper: 'WARN', rank: 1, tone: 'warn' },
+  { name: 'error', value: 2, upper: 'ERROR', rank: 3, tone: 'danger' },
+  { name: 'stale', value: 3, upper: 'STALE', rank: 2, tone: 'neutral' },
+]));
+
+const DIAG_BY_NAME = new Map(DIAG_LEVELS.map((l) => [l.name, l]));
+
+/**
+ * A status level's name from the message's number (0 OK, 1 WARN, 2 ERROR, 3 STALE). Anything else (another number,
+ * missing, not a number) is an error, as the robot PC reads it: an unknown level is not "fine".
+ * @param {any} n @returns {DiagLevelName}
+ */
+export function diagLevelName(n) {
+  const v = typeof n === 'number' ? n : typeof n === 'string' && /^\s*\d+\s*$/.test(n) ? Number(n) : NaN;
+  return DIAG_LEVELS.find((l) => l.value === v)?.name ?? 'error';
+}
+
+/** A level by name: its text, rank and tone. @param {DiagLevelName} name @returns {DiagLevel} */
+export const diagLevel = (name) => /** @type {DiagLevel} */ (DIAG_BY_NAME.get(name) ?? DIAG_BY_NAME.get('error'));
+
+/**
+ * One status in the page's shape.
+ * @typedef {object} DiagStatus
+ * @property {string} name  e.g. "vision: camera brightness"
+ * @property {DiagLevelName} level
+ * @property {string} message  a stale status keeps its last one
+ * @property {string} hardware_id
+ * @property {{ key: string, value: string }[]} values
+ * @property {string} group  the part of the name before the first ": " ("other" when none)
+ * @property {string} short  the name without the group ("camera brightness"; the whole name when it has no group)
+ */
+
+/** The group of statuses whose name has no "component: " part. */
+export const DIAG_OTHER_GROUP = 'other';
+
+/**
+ * A status name's group and the rest: "vision: camera brightness" → { group: "vision", short: "camera brightness" }.
+ * A name without ": " (or with nothing before or after it) goes in "other", whole.
+ * @param {string} name @returns {{ group: string, short: string }}
+ */
+export function diagGroupOf(name) {
+  const i = name.indexOf(': ');
+  const group = i > 0 ? name.slice(0, i).trim() : '';
+  const short = i > 0 ? name.slice(i + 2).trim() : '';
+  return group && short ? { group, short } : { group: DIAG_OTHER_GROUP, short: name };
+}
+
+/**
+ * A diagnostic_msgs/DiagnosticArray's statuses in the page's shape: every field of its type; one status per name
+ * (the later one wins: the aggregator sends one, and the rows are keyed by name); unnamed ones left out.
+ * @param {any} msg @returns {DiagStatus[]}
+ */
+export function normaliseDiagnostics(msg) {
+  /** @type {Map<string, DiagStatus>} */
+  const byName = new Map();
+  for (const s of Array.isArray(msg?.status) ? msg.status : []) {
+    const name = str(s?.name);
+    if (!name) continue;
+    const values = (Array.isArray(s?.values) ? s.values : []).map((/** @type {any} */ kv) => ({ key: str(kv?.key), value: str(kv?.value) }));
+    byName.delete(name); // the later one's place, too
+    byName.set(name, { name, level: diagLevelName(s?.level), message: str(s?.message), hardware_id: str(s?.hardware_id), values, ...diagGroupOf(name) });
+  }
+  return [...byName.values()];
+}
+
+/** @typedef {Record<DiagLevelName, number>} DiagCounts */
+
+/** How many statuses at each level. @param {DiagStatus[]} statuses @returns {DiagCounts} */
+export function diagCounts(statuses) {
+  /** @type {DiagCounts} */
+  const c = { ok: 0, warn: 0, error: 0, stale: 0 };
+  for (const s of statuses) c[s.level]++;
+  return c;
+}
+
+/** The summary line: "5 OK · 1 warning · 0 errors · 1 stale". @param {DiagCounts} c */
+export const diagSummaryText = (c) => `${c.ok} OK · ${count(c.warn, 'warning')} · ${count(c.error, 'error')} · ${c.stale} stale`;
+
+/**
+ * The worst of some levels ('ok' for none).
+ * @param {Iterable<DiagLevelName>} levels @returns {DiagLevelName}
+ */
+export function worstDiagLevel(levels) {
+  let worst = diagLevel('ok');
+  for (const l of levels) if (diagLevel(l).rank > worst.rank) worst = diagLevel(l);
+  return worst.name;
+}
+
+/** Worst level first, then by name. @param {DiagStatus} a @param {DiagStatus} b */
+export const compareDiag = (a, b) => diagLevel(b.level).rank - diagLevel(a.level).rank || (a.name < b.name ? -1 : a.name > b.name ? 1 : 0);
+
+/** @typedef {{ name: string, level: DiagLevelName, statuses: DiagStatus[] }} DiagGroup */
+
+/**
+ * The statuses as a tree of groups (by the part of the name before ": "): in each group the worst first, then by
+ * name; the groups the same way by their worst status, then by name. The input is left as it is.
+ * @param {DiagStatus[]} statuses @returns {DiagGroup[]}
+ */
+export function groupDiagnostics(statuses) {
+  /** @type {Map<string, DiagStatus[]>} */
+  const groups = new Map();
+  for (const s of statuses) {
+    const list = groups.get(s.group);
+    if (list) list.push(s);
+    else groups.set(s.group, [s]);
+  }
+  return [...groups].map(([name, list]) => ({ name, level: worstDiagLevel(list.map((s) => s.level)), statuses: list.sort(compareDiag) }))
+    .sort((a, b) => diagLevel(b.level).rank - diagLevel(a.level).rank || (a.name < b.name ? -1 : a.name > b.name ? 1 : 0));
+}
+
+/** @typedef {'all' | 'problems'} DiagShow */
+
+/** The "Show" choices. */
+export const DIAG_SHOW = /** @type {readonly { id: DiagShow, label: string }[]} */ (Object.freeze([
+  { id: 'all', label: 'All' },
+  { id: 'problems', label: 'Problems only' },
+]));
+
+/**
+ * The statuses the filters let through: "problems" keeps WARN, ERROR and STALE; the text keeps those whose name,
+ * message or hardware id contains every word of it (any case). Order kept.
+ * @param {DiagStatus[]} statuses @param {{ show: DiagShow, text: string }} f @returns {DiagStatus[]}
+ */
+export function filterDiagnostics(statuses, f) {
+  const w = words(f.text);
+  return statuses.filter((s) => {
+    if (f.show === 'problems' && s.level === 'ok') return false;
+    if (!w.length) return true;
+    const hay = `${s.name} ${s.message} ${s.hardware_id}`.toLowerCase();
+    return w.every((x) => hay.includes(x));
+  });
+}
+
+/**
+ * How old the last array is: "updated just now", "updated 2 s ago", and from DIAG_NO_UPDATE_S on "no update for 5 s"
+ * ("no update for 3 min" later); '' before any. `stale` from DIAG_NO_UPDATE_S on.
+ * @param {number | null} atMs  when the last array came @param {number} nowMs @returns {{ text: string, stale: boolean }}
+ */
+export function diagAgeText(atMs, nowMs) {
+  if (atMs === null || !Number.isFinite(atMs)) return { text: '', stale: false };
+  const s = Math.max(0, Math.floor((nowMs - atMs) / 1000));
+  if (s < DIAG_NO_UPDATE_S) return { text: s < 1 ? 'updated just now' : `updated ${s} s ago`, stale: false };
+  if (s < 120) return { text: `no update for ${s} s`, stale: true };
+  const min = Math.floor(s / 60);
+  return { text: min < 120 ? `no update for ${min} min` : `no update for ${Math.floor(min / 60)} h`, stale: true };
 }
