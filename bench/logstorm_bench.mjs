@@ -89,11 +89,11 @@ try {
     const gaps = frames.slice(1).map((t, i) => t - frames[i]);
     flip = !flip;
     const c0 = Date.now();
-    await level.selectOption(flip ? 'warn' : 'all');
+    await level.selectOption(flip ? 'warn' : 'debug');
     await page.waitForFunction((want) => {
       const first = document.querySelector('[data-testid="log-entry"]');
       return want === 'warn' ? !first || first.getAttribute('data-level') !== 'info' : first?.getAttribute('data-level') === 'info';
-    }, flip ? 'warn' : 'all', { timeout: 30_000 }).catch(() => null);
+    }, flip ? 'warn' : 'debug', { timeout: 30_000 }).catch(() => null);
     const click = Date.now() - c0;
     const mem = new Map([...pids].map(([k, p]) => [k, memMiB(p)]));
     const t = (Date.now() - t0) / 1000;
@@ -102,7 +102,7 @@ try {
     console.log(`  ${t.toFixed(0).padStart(5)} | ${WATCH.map((k) => { const [m, a] = mem.get(k) ?? [NaN, NaN]; return `${m.toFixed(1)} (${a.toFixed(1)})`; }).join(' | ')} | ${r.fps.toFixed(1).padStart(8)} | ${r.longest.toFixed(0).padStart(16)} | ${String(click).padStart(6)}`);
   }
   await stormDone;
-  console.log(`  storm: ${stormOut.trim()}`);
+  console.log(`  storm: ${stormOut.split('\n').find((l) => l.startsWith('logged')) ?? 'no summary'}`);
   const during = rows.filter((r) => r.t > 10 && r.t <= SECONDS);
   for (const k of WATCH) {
     const first = during[0]?.mem.get(k)?.[0]; const last = during.at(-1)?.mem.get(k)?.[0];
