@@ -4,7 +4,8 @@ The cell file's video streams choose among these viewpoints and the cell's own (
 sim/cell_file.py); several streams may show one viewpoint, which is then rendered once. The render process holds a replica of the cell (same construction
 code, no physics stepping). At the camera rate the main process sends it a snapshot of joint positions and
 part poses and the viewpoints wanted; it renders those (EGL renderer plugin when it loads, TinyRenderer
-otherwise), JPEG-encodes them and sends the bytes back.
+otherwise), JPEG-encodes them and sends the bytes back; for a raw stream (`type: raw`) it sends the pixels at
+that stream's size instead (rgb8, the render cut to its aspect and scaled).
 """
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import multiprocessing as mp
 import threading
 import time
 from dataclasses import dataclass
-from typing import Callable, Iterable, Optional
+from typing import Callable, Iterable, Optional, Protocol
 
 from .pacing import Pacer
 
@@ -80,21 +81,51 @@ def _render_main(conn, seed: int, urdf_dir: str, size: tuple[int, int], world_sp
         msg = conn.recv()
         if msg is None:
             break
-        snapshot, wanted = msg
+        snapshot, wanted, raw = msg
         world.apply_snapshot(snapshot)
         frames = []
         for name, view, projection in views:
-            if name not in wanted:
+            if name not in wanted and name not in raw:
                 continue
             t0 = time.perf_counter()
             _, _, rgba, _, _ = p.getCameraImage(w, h, view, projection, renderer=renderer,
                                                 flags=pybullet.ER_NO_SEGMENTATION_MASK)
             img = np.reshape(np.asarray(rgba, dtype=np.uint8), (h, w, 4))[:, :, :3]
-            buf = io.BytesIO()
-            Image.fromarray(img).save(buf, format="JPEG", quality=JPEG_QUALITY)
-            frames.append((name, buf.getvalue(), (time.perf_counter() - t0) * 1000))
+            encoded = b""
+            if name in wanted:
+                buf = io.BytesIO()
+                Image.fromarray(img).save(buf, format="JPEG", quality=JPEG_QUALITY)
+                encoded = buf.getvalue()
+            raws = {size: raw_pixels(img, size) for size in raw.get(name, ())}
+            frames.append((name, encoded, (time.perf_counter() - t0) * 1000, raws))
         conn.send(frames)
     world.close()
+
+
+class RawOutputs(Protocol):
+    """The raw (sensor_msgs/Image) cameras of the cell: which sizes of which viewpoint someone watches, and where
+    their pixels go."""
+    def wanted(self) -> dict[str, set[tuple[int, int]]]: ...
+    def publish(self, view: str, size: tuple[int, int], pixels: bytes) -> None: ...
+
+
+def raw_pixels(img, size: tuple[int, int]) -> bytes:
+    """A rendered picture (h, w, 3 uint8) as a raw camera of `size` gives it (rgb8 rows): the centre cut to that
+    size's aspect, then scaled (the renderer draws at the camera size; a 720p picture would take it 3x longer)."""
+    import numpy as np
+    from PIL import Image
+    h, w = img.shape[:2]
+    tw, th = size
+    if tw * h > th * w:     # wider than the render: cut rows
+        ch = max(1, round(w * th / tw))
+        img = img[(h - ch) // 2:(h - ch) // 2 + ch]
+    else:
+        cw = max(1, round(h * tw / th))
+        img = img[:, (w - cw) // 2:(w - cw) // 2 + cw]
+    out = Image.fromarray(np.ascontiguousarray(img))
+    if out.size != size:
+        out = out.resize(size, Image.BILINEAR)
+    return out.tobytes()
 
 
 class CameraRig:
@@ -123,10 +154,13 @@ class CameraRig:
         self.frames = 0
         self.render_ms: list[float] = []
         self.last: dict[str, bytes] = {}
+        self._raw: Optional[RawOutputs] = None
 
     def start(self, controller, publish: Optional[Callable[[str, bytes], None]],
-              watched: Optional[Callable[[], set[str]]] = None) -> None:
-        """`watched` names the viewpoints someone subscribes to; only those are rendered (None: all of them)."""
+              watched: Optional[Callable[[], set[str]]] = None, raw: Optional["RawOutputs"] = None) -> None:
+        """`watched` names the viewpoints someone subscribes to as JPEG (None: all of them); `raw` the raw images
+        someone subscribes to. Only those are rendered."""
+        self._raw = raw
         self._thread = threading.Thread(target=self._loop, args=(controller, publish, watched), name="cameras", daemon=True)
         self._thread.start()
 
@@ -152,24 +186,29 @@ class CameraRig:
         while not self._stop.is_set():
             # Rendering is the costliest thing the cell does: skip the views nobody watches.
             wanted = self.views if watched is None else set(watched()) & self.views
-            if not wanted:
+            raw = {v: sizes for v, sizes in (self._raw.wanted() if self._raw else {}).items() if v in self.views and sizes}
+            if not wanted and not raw:
                 pacer.wait()
                 continue
             with controller.lock:  # the physics client is not thread-safe
                 snap = self.world.snapshot()
-            self.conn.send((snap, wanted))
+            self.conn.send((snap, wanted, raw))
             while not self.conn.poll(0.05):
                 if self._stop.is_set() or not self.proc.is_alive():
                     return
             frames = self.conn.recv()
-            for name, jpeg, ms in frames:
-                self.last[name] = jpeg
+            for name, jpeg, ms, raws in frames:
                 self.render_ms.append(ms)
-                if publish is not None:
-                    try:
-                        publish(name, jpeg)
-                    except Exception:
-                        log.exception("image publish failed")
+                try:
+                    if jpeg:
+                        self.last[name] = jpeg
+                        if publish is not None:
+                            publish(name, jpeg)
+                    for size, pixels in raws.items():
+                        assert self._raw is not None
+                        self._raw.publish(name, size, pixels)
+                except Exception:
+                    log.exception("image publish failed")
             self.frames += 1
             pacer.wait()
 

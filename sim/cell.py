@@ -100,7 +100,8 @@ class Cell:
             from .ros_bridge import RosBridge, ros_master_online
             if ros_master_online():
                 try:
-                    self.ros = RosBridge(self, self.opts.devices, self.opts.sensor_rate, self.opts.speed)
+                    self.ros = RosBridge(self, self.opts.devices, self.opts.sensor_rate, self.opts.speed,
+                                         camera_size=self.opts.camera_size)
                 except ImportError as e:  # e.g. cell_msgs not built yet: still serve the UR ports
                     log.error("ROS messages not importable (%s): build ros_backend; running without ROS", e)
                 else:
@@ -109,7 +110,7 @@ class Cell:
                 log.warning("ROS master not reachable: running without ROS")
         if self.cameras is not None:
             self.cameras.start(self.controller, self.ros.publish_image if self.ros else None,
-                               self.ros.watched_views if self.ros else None)
+                               self.ros.watched_views if self.ros else None, self.ros)
         self._t0 = (time.monotonic(), self.loop.sim_time)
         self.loop.start(self.opts.speed)
         for s in self.servers:

@@ -58,6 +58,8 @@ class Stream:
     name: str
     topic: str
     view: str  # a key of VIEWS
+    raw: bool = False                          # sensor_msgs/Image (rgb8) instead of CompressedImage
+    size: Optional[tuple[int, int]] = None     # a raw stream's image size (`sim_size`); None: the camera size
 
 
 @dataclass(frozen=True)
@@ -209,7 +211,15 @@ def devices_from(doc: Any, path: str = "<cell file>", views: Optional[Sequence[s
         if view not in views:
             raise bad(f"{where}.view", f"unknown viewpoint {view!r} (the sim has: {', '.join(views)})")
         name = entry.get("name")
-        streams.append(Stream(name=name if isinstance(name, str) else topic, topic=topic, view=view))
+        kind = entry.get("type", "compressed")
+        if kind not in ("compressed", "raw"):
+            raise bad(f"{where}.type", f"expected compressed or raw, not {kind!r}")
+        size = entry.get("sim_size")
+        if size is not None and not (isinstance(size, list) and len(size) == 2
+                                     and all(isinstance(v, int) and 16 <= v <= 4096 for v in size)):
+            raise bad(f"{where}.sim_size", "expected [width, height] in pixels (16..4096)")
+        streams.append(Stream(name=name if isinstance(name, str) else topic, topic=topic, view=view,
+                              raw=kind == "raw", size=tuple(size) if size else None))
 
     scene = parse_scene(doc, world, path)
     devices = CellDevices(path=path, wrench_topics=tuple(by_type[WRENCH_TYPE]),

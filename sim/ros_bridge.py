@@ -2,7 +2,7 @@
 
 The device topics are the ones the cell file declares (sim/cell_file.py): the wrist F/T reading of the arm a
 WrenchStamped sensor names (default the first) on its topic and the tactile pad on every Scatter sensor topic (sensor
-rate), one sensor_msgs/CompressedImage camera per video stream (camera rate, only while the topic has a subscriber).
+rate), one sensor_msgs/CompressedImage (or, `type: raw`, sensor_msgs/Image) camera per video stream (camera rate, only while the topic has a subscriber).
 Fixed names: /sim/faults (latched cell_msgs/AlarmList: the devices' fault state, for the cell's alarms feature to
 turn into alarms; the sim publishes no alarm list itself), /sim/objects (geometry_msgs/PoseArray, every part in
 creation order at OBJECTS_RATE, frame `base` when the only arm stands at the world origin, else `world`: ground truth
@@ -77,13 +77,13 @@ def ros_master_online() -> bool:
 
 class RosBridge:
     def __init__(self, cell, devices: CellDevices, sensor_rate: float, speed: float = 1.0,
-                 node_name: str = "sim_cell") -> None:
+                 node_name: str = "sim_cell", camera_size: tuple[int, int] = (640, 480)) -> None:
         """`cell`: the sim.cell.Cell (its controllers by group, fault book, lock, world and trigger_fault)."""
         import rospy
         from cell_msgs.msg import AlarmList, Scatter
         from cell_msgs.srv import TriggerFault
         from geometry_msgs.msg import Pose, PoseArray, WrenchStamped
-        from sensor_msgs.msg import CompressedImage
+        from sensor_msgs.msg import CompressedImage, Image
 
         self.rospy = rospy
         self.cell = cell
@@ -113,7 +113,11 @@ class RosBridge:
         # Latched: a node that starts later still learns which faults are active right now.
         self.pub_faults = rospy.Publisher("/sim/faults", AlarmList, queue_size=5, latch=True)
         self.pub_images: list[tuple[Stream, rospy.Publisher]] = [
-            (s, rospy.Publisher(s.topic, CompressedImage, queue_size=2)) for s in devices.streams]
+            (s, rospy.Publisher(s.topic, CompressedImage, queue_size=2)) for s in devices.streams if not s.raw]
+        # Raw cameras (sensor_msgs/Image rgb8, `type: raw`), as usb_cam or a GigE driver publishes them.
+        self.pub_raw: list[tuple[Stream, rospy.Publisher]] = [
+            (s, rospy.Publisher(s.topic, Image, queue_size=1)) for s in devices.streams if s.raw]
+        self.camera_size = camera_size
         # The cameras' diagnostics (frame rate per stream), as a real camera driver publishes them.
         self.pub_diagnostics = None
         self._frames: dict[str, Deque[float]] = {s.name: deque(maxlen=200) for s in devices.streams}
@@ -163,7 +167,7 @@ class RosBridge:
                 for f in frames:
                     log.info("TF %s -> %s at %s on %s", f.parent, f.child, list(f.translation), TF_STATIC)
         self._types = dict(AlarmList=AlarmList, Scatter=Scatter, WrenchStamped=WrenchStamped,
-                           CompressedImage=CompressedImage, Pose=Pose, PoseArray=PoseArray)
+                           CompressedImage=CompressedImage, Image=Image, Pose=Pose, PoseArray=PoseArray)
         self.service = rospy.Service("/sim/trigger_fault", TriggerFault, self._trigger_fault)
         from std_srvs.srv import Trigger
         self.restock_service = rospy.Service("/sim/restock", Trigger, self._restock)
@@ -240,7 +244,7 @@ class RosBridge:
         now = time.monotonic()
         out = d.DiagnosticArray()
         out.header.stamp = self.rospy.Time.now()
-        for s, pub in self.pub_images:
+        for s, pub in self.pub_images + self.pub_raw:
             level, name, message, values = camera_diagnostic(self._node_name, s, list(self._frames[s.name]),
                                                              pub.get_num_connections() > 0, now)
             out.status.append(d.DiagnosticStatus(level=level, name=name, message=message, hardware_id=s.topic,
@@ -268,6 +272,31 @@ class RosBridge:
     def watched_views(self) -> set[str]:
         """Viewpoints shown by at least one stream whose image topic has a subscriber right now."""
         return {s.view for s, pub in self.pub_images if pub.get_num_connections() > 0}
+
+    def raw_size(self, s: Stream) -> tuple[int, int]:
+        return s.size or self.camera_size
+
+    def wanted(self) -> dict[str, set[tuple[int, int]]]:
+        """The raw images someone subscribes to: viewpoint -> sizes (sim.cameras.RawOutputs)."""
+        out: dict[str, set[tuple[int, int]]] = {}
+        for s, pub in self.pub_raw:
+            if pub.get_num_connections() > 0:
+                out.setdefault(s.view, set()).add(self.raw_size(s))
+        return out
+
+    def publish(self, view: str, size: tuple[int, int], pixels: bytes) -> None:
+        """One viewpoint's raw pixels (rgb8) at `size` to every raw stream showing it at that size."""
+        msg = self._types["Image"]()
+        msg.header.stamp = self.rospy.Time.now()
+        msg.header.frame_id = f"camera_{view}"
+        msg.width, msg.height = size
+        msg.encoding, msg.is_bigendian, msg.step = "rgb8", 0, size[0] * 3
+        msg.data = pixels
+        now = time.monotonic()
+        for s, pub in self.pub_raw:
+            if s.view == view and self.raw_size(s) == size and pub.get_num_connections() > 0:
+                pub.publish(msg)
+                self._frames[s.name].append(now)
 
     def publish_image(self, view: str, jpeg: bytes) -> None:
         """One rendered viewpoint goes to every stream showing it (rospy skips topics without subscribers)."""

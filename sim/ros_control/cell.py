@@ -188,7 +188,7 @@ class RosControlCell:
                 log.warning("ROS master not reachable: running without ROS")
         if self.cameras is not None:
             self.cameras.start(self, self.ros.publish_image if self.ros else None,
-                               self.ros.watched_views if self.ros else None)
+                               self.ros.watched_views if self.ros else None, self.ros)
         self._t0 = (time.monotonic(), self.sim_time)
         self._thread = threading.Thread(target=self._loop, name="ros-control-loop", daemon=True)
         self._thread.start()

@@ -42,6 +42,41 @@ def test_only_watched_cameras_are_rendered() -> None:
         world.close()
 
 
+def test_a_raw_stream_gets_its_size_of_pixels_and_no_jpeg_is_made_for_it() -> None:
+    """A raw (sensor_msgs/Image) stream at 1280x720 from a 96x72 render: the centre cut to 16:9, scaled up."""
+    world = World(seed=0)
+    rig = CameraRig(world, (96, 72), rate=20.0)
+    jpegs: list[str] = []
+    raws: list[tuple[str, tuple[int, int], int]] = []
+
+    class Raw:
+        def wanted(self):
+            return {"global": {(1280, 720)}}
+
+        def publish(self, view, size, pixels):
+            raws.append((view, size, len(pixels)))
+
+    rig.start(_Controller(), lambda name, jpeg: jpegs.append(name), lambda: set(), Raw())
+    try:
+        wait_for(lambda: len(raws) >= 3, 60, what="raw frames")
+        assert set(raws) == {("global", (1280, 720), 1280 * 720 * 3)}
+        assert jpegs == []
+    finally:
+        rig.stop()
+        world.close()
+
+
+def test_raw_pixels_keep_the_aspect_of_the_size_asked() -> None:
+    import numpy as np
+    from sim.cameras import raw_pixels
+    img = np.zeros((90, 160, 3), np.uint8)
+    img[:, :30] = 255            # a white band on the left, cut away for a 1:1 picture (columns 35..124)
+    square = np.frombuffer(raw_pixels(img, (90, 90)), np.uint8).reshape(90, 90, 3)
+    assert square.max() == 0
+    wide = np.frombuffer(raw_pixels(img, (320, 180)), np.uint8).reshape(180, 320, 3)
+    assert wide[:, :50].min() == 255 and wide[:, 70:].max() == 0
+
+
 def wait_for_quiet(predicate, seconds: float) -> bool:
     """True as soon as `predicate` holds within `seconds`; False if it never does (what this test wants)."""
     try:

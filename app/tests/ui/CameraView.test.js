@@ -4,8 +4,10 @@ import { flushSync } from 'svelte';
 import CameraView from '../../src/lib/ui/CameraView.svelte';
 import {
   imageSrc, imageMime, bytesToBase64, cameraStreams, frameBytes, LatestFrameDecoder, FrameStats, staleAfterMs, shortAge,
-  frameStatus, clampView, zoomAt, panView, pinchView, containRect, IDENTITY, ZOOM_MAX,
+  frameStatus, clampView, zoomAt, panView, pinchView, containRect, IDENTITY, ZOOM_MAX, wantedWidth, videoRequest,
+  videoAnswer, streamProblem, RAW_QUALITY,
 } from '../../src/lib/ui/camera.js';
+import { NotConnectedError } from '../../src/lib/core/connection.svelte.js';
 
 const streams = [
   { name: 'Workbench', topic: '/cell/camera/workbench/image/compressed' },
@@ -67,8 +69,59 @@ describe('camera.js', () => {
   });
 
   it('keeps only streams with a topic', () => {
-    expect(cameraStreams([{ name: 'A', topic: '/a' }, { topic: '/b' }, { name: 'C' }, null])).toEqual([{ name: 'A', topic: '/a' }, { name: '/b', topic: '/b' }]);
+    expect(cameraStreams([{ name: 'A', topic: '/a' }, { topic: '/b' }, { name: 'C' }, null])).toEqual([
+      { name: 'A', topic: '/a', type: 'compressed' },
+      { name: '/b', topic: '/b', type: 'compressed' },
+    ]);
     expect(cameraStreams(undefined)).toEqual([]);
+  });
+
+  it('keeps a stream\'s type: raw, or compressed for anything else', () => {
+    const got = cameraStreams([{ topic: '/r', type: 'raw' }, { topic: '/c', type: 'compressed' }, { topic: '/x', type: 'h264' }, { topic: '/n' }]);
+    expect(got.map((s) => s.type)).toEqual(['raw', 'compressed', 'compressed', 'compressed']);
+  });
+
+  it('wanted width: device pixels rounded up to a step of 160, at least 160', () => {
+    expect(wantedWidth(390, 3)).toBe(1280); // 1170 device px
+    expect(wantedWidth(800, 1)).toBe(800);
+    expect(wantedWidth(801, 1)).toBe(960);
+    expect(wantedWidth(390, 2)).toBe(800); // 780
+    expect(wantedWidth(395, 2)).toBe(800); // a small resize asks the same
+    expect(wantedWidth(333.3, 1.5)).toBe(640); // ceil(499.95) = 500
+    expect(wantedWidth(1920, 1)).toBe(1920);
+    expect(wantedWidth(10, 1)).toBe(160);
+    expect(wantedWidth(0, 2)).toBe(160);
+    expect(wantedWidth(NaN, 1)).toBe(160);
+    expect(wantedWidth(500, 0)).toBe(640); // no ratio known: 1
+    expect(wantedWidth(500, NaN)).toBe(640);
+  });
+
+  it('video request and answer', () => {
+    expect(RAW_QUALITY).toBe(70);
+    expect(videoRequest('/cam/image_raw', 800)).toEqual({ topic: '/cam/image_raw', width: 800, quality: 70 });
+    expect(videoAnswer({ ok: true, message: '', topic: '/cell/video/cam/w800_q70', width: 800, height: 600, quality: 70 }))
+      .toEqual({ ok: true, topic: '/cell/video/cam/w800_q70', width: 800, height: 600 });
+    expect(videoAnswer({ ok: false, message: '/x is not a raw camera stream of the cell file', topic: '' }))
+      .toEqual({ ok: false, message: '/x is not a raw camera stream of the cell file' });
+    expect(videoAnswer({ ok: true, topic: '' })).toMatchObject({ ok: false });
+    expect(videoAnswer(undefined)).toMatchObject({ ok: false, message: expect.any(String) });
+  });
+
+  it('stream problem: the message of a WARN or ERROR status whose hardware_id is the stream', () => {
+    const msg = {
+      status: [
+        { level: 0, name: 'video: A', message: '640x480 at 15.0 fps', hardware_id: '/a' },
+        { level: 2, name: 'video: B', message: 'unsupported encoding yuv422 (shown: rgb8, bgr8, mono8, mono16, 16UC1)', hardware_id: '/b' },
+        { level: 1, name: 'video: C', message: 'no frame from /c for 5 s', hardware_id: '/c' },
+        { level: '\u0002', message: 'frame size does not match its header', hardware_id: '/d' },
+      ],
+    };
+    expect(streamProblem(msg, '/a')).toBeNull();
+    expect(streamProblem(msg, '/b')).toBe('unsupported encoding yuv422 (shown: rgb8, bgr8, mono8, mono16, 16UC1)');
+    expect(streamProblem(msg, '/c')).toBe('no frame from /c for 5 s');
+    expect(streamProblem(msg, '/d')).toBe('frame size does not match its header');
+    expect(streamProblem(msg, '/e')).toBeNull();
+    expect(streamProblem(null, '/b')).toBeNull();
   });
 
   it('frame bytes: CBOR bytes as they are (no copy), ints and base64 as a fallback', () => {
@@ -247,5 +300,264 @@ describe('CameraView', () => {
     render(CameraView, { streams: [], subscribe: s.subscribe });
     expect(screen.getByText(/No camera streams/)).toBeTruthy();
     expect(s.subscribe).not.toHaveBeenCalled();
+  });
+});
+
+describe('CameraView: raw streams (asked of the video service)', () => {
+  const RAW = '/cell/camera/arm/image_raw';
+  const rawStreams = [
+    { name: 'Arm', topic: RAW, type: 'raw' },
+    { name: 'Workbench', topic: '/cell/camera/workbench/image/compressed', type: 'compressed' },
+  ];
+  const OUT = (/** @type {number} */ w) => `/cell/video/cell_camera_arm_image_raw/w${w}_q70`;
+  const ok = (/** @type {number} */ w) => ({ ok: true, message: '', topic: OUT(w), width: w, height: (w * 3) / 4, quality: 70 });
+  const REQ = ['/cell/video/request', 'cell_msgs/VideoRequest'];
+
+  /** A callService double whose answers the test gives, one call at a time. */
+  function fakeService() {
+    /** @type {{ name: string, type: string, args: any, resolve: (v: any) => void, reject: (e: any) => void }[]} */
+    const calls = [];
+    const callService = vi.fn(
+      (/** @type {string} */ name, /** @type {string} */ type, /** @type {any} */ args) =>
+        new Promise((resolve, reject) => calls.push({ name, type, args, resolve, reject })),
+    );
+    return { calls, callService };
+  }
+
+  /** ResizeObservers made by the component; resize() sets the frame's width and tells them. */
+  /** @type {{ cb: () => void, el: Element | null, gone: boolean }[]} */
+  let observers = [];
+  beforeEach(() => {
+    observers = [];
+    vi.stubGlobal(
+      'ResizeObserver',
+      class {
+        /** @param {() => void} cb */
+        constructor(cb) {
+          /** @type {{ cb: () => void, el: Element | null, gone: boolean }} */
+          this.o = { cb, el: null, gone: false };
+          observers.push(this.o);
+        }
+        /** @param {Element} el */
+        observe(el) {
+          this.o.el = el;
+        }
+        disconnect() {
+          this.o.gone = true;
+        }
+      },
+    );
+  });
+  afterEach(() => vi.unstubAllGlobals());
+
+  /** @param {number} cssWidth */
+  function resize(cssWidth) {
+    const el = screen.getByTestId('camera-frame');
+    Object.defineProperty(el, 'clientWidth', { value: cssWidth, configurable: true });
+    for (const o of observers) if (!o.gone && o.el === el) o.cb();
+  }
+
+  /** Let answered promises run and the effects they caused. */
+  async function settle() {
+    for (let i = 0; i < 5; i++) await Promise.resolve();
+    flushSync();
+  }
+
+  it('asks for a JPEG stream at the frame\'s width and subscribes the topic it names (CBOR, newest frame only)', async () => {
+    const s = fakeSubscribe();
+    const svc = fakeService();
+    const d = fakeDecode();
+    render(CameraView, { streams: rawStreams, subscribe: s.subscribe, callService: svc.callService, decode: d.decode });
+    const root = screen.getByTestId('camera');
+    expect(root.dataset.type).toBe('raw');
+    // jsdom lays nothing out (width 0): the smallest step.
+    expect(svc.calls.map((c) => [c.name, c.type, c.args])).toEqual([[...REQ, { topic: RAW, width: 160, quality: 70 }]]);
+    expect(root.dataset.requestWidth).toBe('160');
+    // The raw topic itself is never subscribed; only the status until the answer comes.
+    expect([...s.live.keys()]).toEqual(['/cell/video/status']);
+    expect(root.dataset.sourceTopic).toBeUndefined();
+
+    svc.calls[0].resolve(ok(160));
+    await settle();
+    expect([...s.live.keys()].sort()).toEqual([OUT(160), '/cell/video/status'].sort());
+    const call = s.subscribe.mock.calls.find((c) => c[0] === OUT(160));
+    expect(call?.[1]).toBe('sensor_msgs/CompressedImage');
+    expect(s.options.get(OUT(160))).toEqual({ throttle_rate: 100, queue_length: 1, compression: 'cbor' });
+    expect(s.options.get('/cell/video/status')).toEqual({ queue_length: 1 });
+    expect(s.subscribe.mock.calls.find((c) => c[0] === '/cell/video/status')?.[1]).toBe('diagnostic_msgs/DiagnosticArray');
+    expect(root.dataset.sourceTopic).toBe(OUT(160));
+
+    s.live.get(OUT(160))?.({ format: 'jpeg', data: JPEG });
+    await vi.waitFor(() => expect(drawImage).toHaveBeenCalledTimes(1));
+    flushSync();
+    expect(screen.getByRole('img', { name: 'Arm camera image' })).toBeTruthy();
+    expect(screen.queryByTestId('camera-error')).toBeNull();
+  });
+
+  it('asks again when the frame\'s size settles at another step; the same topic keeps the subscription, another moves it', async () => {
+    vi.useFakeTimers({ toFake: ['setTimeout', 'clearTimeout'] });
+    vi.stubGlobal('devicePixelRatio', 2);
+    const s = fakeSubscribe();
+    const svc = fakeService();
+    render(CameraView, { streams: rawStreams, subscribe: s.subscribe, callService: svc.callService, decode: fakeDecode().decode });
+    svc.calls[0].resolve(ok(160));
+    await settle();
+    const root = screen.getByTestId('camera');
+    expect(root.dataset.sourceTopic).toBe(OUT(160));
+
+    // A resize is asked about once it settles (~250 ms), not on every step of the drag.
+    resize(300);
+    vi.advanceTimersByTime(100);
+    resize(390);
+    vi.advanceTimersByTime(200);
+    flushSync();
+    expect(svc.calls).toHaveLength(1);
+    vi.advanceTimersByTime(60);
+    flushSync();
+    expect(svc.calls).toHaveLength(2);
+    expect(svc.calls[1].args).toEqual({ topic: RAW, width: 800, quality: 70 }); // 390 css px x 2 = 780 -> 800
+    expect(root.dataset.requestWidth).toBe('800');
+    // Until the answer, the old size keeps showing.
+    expect(s.live.has(OUT(160))).toBe(true);
+
+    svc.calls[1].resolve(ok(800));
+    await settle();
+    expect([...s.live.keys()].sort()).toEqual([OUT(800), '/cell/video/status'].sort());
+    expect(root.dataset.sourceTopic).toBe(OUT(800));
+
+    // A small resize stays in the same step: not asked again.
+    resize(395);
+    vi.advanceTimersByTime(300);
+    flushSync();
+    expect(svc.calls).toHaveLength(2);
+
+    // Full screen (a larger box): asked again; an answer naming the same topic (the camera is no wider) keeps it.
+    const subs = s.subscribe.mock.calls.length;
+    resize(1000);
+    vi.advanceTimersByTime(300);
+    flushSync();
+    expect(svc.calls[2].args.width).toBe(2080);
+    svc.calls[2].resolve(ok(800));
+    await settle();
+    expect(s.subscribe.mock.calls.length).toBe(subs);
+    expect(s.live.has(OUT(800))).toBe(true);
+  });
+
+  it('a refusal or a failed call shows in place and is asked again after 3 s while shown', async () => {
+    vi.useFakeTimers({ toFake: ['setTimeout', 'clearTimeout'] });
+    const s = fakeSubscribe();
+    const svc = fakeService();
+    const { unmount } = render(CameraView, { streams: rawStreams, subscribe: s.subscribe, callService: svc.callService, decode: fakeDecode().decode });
+    svc.calls[0].resolve({ ok: false, message: '/cell/camera/arm/image_raw is not a raw camera stream of the cell file', topic: '' });
+    await settle();
+    const err = screen.getByTestId('camera-error');
+    expect(err.getAttribute('role')).toBe('status');
+    expect(err.textContent).toBe('Camera error: /cell/camera/arm/image_raw is not a raw camera stream of the cell file');
+    expect(screen.getByTestId('camera').dataset.sourceTopic).toBeUndefined();
+
+    vi.advanceTimersByTime(2900);
+    expect(svc.calls).toHaveLength(1);
+    vi.advanceTimersByTime(100);
+    expect(svc.calls).toHaveLength(2);
+    svc.calls[1].reject(new NotConnectedError('service call'));
+    await settle();
+    expect(screen.getByTestId('camera-error').textContent).toMatch(/^Camera error: Not connected to ROS/);
+    vi.advanceTimersByTime(3000);
+    expect(svc.calls).toHaveLength(3);
+    svc.calls[2].resolve(ok(160));
+    await settle();
+    expect(screen.queryByTestId('camera-error')).toBeNull();
+    expect(s.live.has(OUT(160))).toBe(true);
+
+    unmount();
+    expect(s.live.size).toBe(0);
+    vi.advanceTimersByTime(10_000);
+    expect(svc.calls).toHaveLength(3);
+  });
+
+  it('nothing is asked or subscribed while the page is hidden; back visible, it asks first', async () => {
+    vi.useFakeTimers({ toFake: ['setTimeout', 'clearTimeout'] });
+    const s = fakeSubscribe();
+    const svc = fakeService();
+    render(CameraView, { streams: rawStreams, subscribe: s.subscribe, callService: svc.callService, decode: fakeDecode().decode });
+    svc.calls[0].resolve({ ok: false, message: 'busy', topic: '' });
+    await settle();
+    setVisibility('hidden');
+    flushSync();
+    expect(s.live.size).toBe(0);
+    vi.advanceTimersByTime(10_000);
+    expect(svc.calls).toHaveLength(1); // the pending retry went with the page
+
+    setVisibility('visible');
+    flushSync();
+    expect(svc.calls).toHaveLength(2);
+    svc.calls[1].resolve(ok(160));
+    await settle();
+    expect(s.live.has(OUT(160))).toBe(true);
+
+    setVisibility('hidden');
+    flushSync();
+    expect(s.live.size).toBe(0);
+    setVisibility('visible');
+    flushSync();
+    // Not the old output at once (unwatched, it may be gone): the answer decides.
+    expect([...s.live.keys()]).toEqual(['/cell/video/status']);
+    expect(svc.calls).toHaveLength(3);
+    svc.calls[2].resolve(ok(160));
+    await settle();
+    expect(s.live.has(OUT(160))).toBe(true);
+  });
+
+  it('shows the video node\'s error for the shown stream over the picture; hidden when fine', async () => {
+    const s = fakeSubscribe();
+    const svc = fakeService();
+    render(CameraView, { streams: rawStreams, subscribe: s.subscribe, callService: svc.callService, decode: fakeDecode().decode });
+    svc.calls[0].resolve(ok(160));
+    await settle();
+    const status = s.live.get('/cell/video/status');
+    status?.({ status: [{ level: 2, name: 'video: Arm', message: 'unsupported encoding yuv422 (shown: rgb8, bgr8, mono8, mono16, 16UC1)', hardware_id: RAW, values: [] }] });
+    flushSync();
+    const err = screen.getByTestId('camera-error');
+    expect(err.textContent).toBe('Camera error: unsupported encoding yuv422 (shown: rgb8, bgr8, mono8, mono16, 16UC1)');
+    // In the frame, over the picture: still subscribed, the picture still shows.
+    expect(screen.getByTestId('camera-frame').contains(err)).toBe(true);
+    expect(s.live.has(OUT(160))).toBe(true);
+
+    status?.({ status: [{ level: 1, message: 'frame size does not match its header', hardware_id: RAW }] });
+    flushSync();
+    expect(screen.getByTestId('camera-error').textContent).toBe('Camera error: frame size does not match its header');
+    status?.({ status: [{ level: 2, message: 'other camera broken', hardware_id: '/other' }, { level: 0, message: '640x480 at 15.0 fps', hardware_id: RAW }] });
+    flushSync();
+    expect(screen.queryByTestId('camera-error')).toBeNull();
+  });
+
+  it('another stream: the raw stream\'s subscriptions go, a late answer for it is ignored; compressed streams as before', async () => {
+    const s = fakeSubscribe();
+    const svc = fakeService();
+    render(CameraView, { streams: rawStreams, subscribe: s.subscribe, callService: svc.callService, decode: fakeDecode().decode });
+    const root = screen.getByTestId('camera');
+    await fireEvent.change(screen.getByRole('combobox', { name: 'Camera' }), { target: { value: rawStreams[1].topic } });
+    expect([...s.live.keys()]).toEqual([rawStreams[1].topic]);
+    expect(root.dataset.type).toBe('compressed');
+    expect(root.dataset.requestWidth).toBeUndefined();
+    expect(root.dataset.sourceTopic).toBe(rawStreams[1].topic);
+    expect(svc.calls).toHaveLength(1);
+
+    // Back to the raw stream before the first answer came: that answer is for a view that is gone.
+    await fireEvent.change(screen.getByRole('combobox', { name: 'Camera' }), { target: { value: RAW } });
+    expect(svc.calls).toHaveLength(2);
+    svc.calls[0].resolve(ok(320));
+    await settle();
+    expect([...s.live.keys()]).toEqual(['/cell/video/status']);
+    svc.calls[1].resolve(ok(160));
+    await settle();
+    expect([...s.live.keys()].sort()).toEqual([OUT(160), '/cell/video/status'].sort());
+  });
+
+  it('without a callService a raw stream says it needs the video service', () => {
+    const s = fakeSubscribe();
+    render(CameraView, { streams: rawStreams, subscribe: s.subscribe, decode: fakeDecode().decode });
+    expect(screen.getByTestId('camera-error').textContent).toBe('Camera error: This camera needs the video service');
+    expect(s.live.has(RAW)).toBe(false);
   });
 });

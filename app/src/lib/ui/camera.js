@@ -4,6 +4,9 @@
  * binary frame, no base64 in JSON); frameBytes() -> Blob -> createImageBitmap -> canvas (LatestFrameDecoder).
  * imageSrc() (a data: URL from the JSON encoding's base64) stays for callers without CBOR.
  * Also: the frame rate and age (FrameStats, frameStatus), and zoom/pan math for pinch and buttons.
+ * A raw (sensor_msgs/Image) stream is never subscribed by the browser: the video service (/cell/video/request)
+ * names a JPEG CompressedImage topic at the width the viewer can show (wantedWidth), and /cell/video/status says
+ * what is wrong with a stream (streamProblem).
  */
 
 /**
@@ -40,16 +43,89 @@ export function imageSrc(msg) {
   return `data:${imageMime(msg?.format)};base64,${b64}`;
 }
 
+/** @typedef {'compressed' | 'raw'} StreamType */
+/** @typedef {{ name: string, topic: string, type: StreamType }} CameraStream */
+
 /**
- * The streams a page may show: /api/config `features.video.streams`, each { name, topic }; anything else dropped.
+ * The streams a page may show: /api/config `features.video.streams`, each { name, topic, type }; anything without a
+ * topic dropped. type 'raw' is a sensor_msgs/Image topic (asked of the video service); anything else 'compressed'
+ * (a CompressedImage topic, subscribed as it is).
  * @param {unknown} streams
- * @returns {{ name: string, topic: string }[]}
+ * @returns {CameraStream[]}
  */
 export function cameraStreams(streams) {
   if (!Array.isArray(streams)) return [];
   return streams
     .filter((s) => s && typeof s.topic === 'string' && s.topic)
-    .map((s) => ({ name: typeof s.name === 'string' && s.name ? s.name : s.topic, topic: s.topic }));
+    .map((s) => ({ name: typeof s.name === 'string' && s.name ? s.name : s.topic, topic: s.topic, type: s.type === 'raw' ? 'raw' : 'compressed' }));
+}
+
+// ---- raw streams: the video service encodes them to JPEG at the viewer's size ----
+
+export const VIDEO_REQUEST_SERVICE = '/cell/video/request';
+export const VIDEO_REQUEST_TYPE = 'cell_msgs/VideoRequest';
+export const VIDEO_STATUS_TOPIC = '/cell/video/status';
+export const VIDEO_STATUS_TYPE = 'diagnostic_msgs/DiagnosticArray';
+/** JPEG quality asked for raw streams (the node rounds it to a step of 10 so viewers share an encoding). */
+export const RAW_QUALITY = 70;
+/** Widths are asked in steps of this many device pixels: viewers of similar size share one encoding, and a small
+ * resize does not ask again. */
+export const WIDTH_STEP = 160;
+/** A refused or failed request is asked again after this long (while the stream is still shown). */
+export const RETRY_MS = 3000;
+/** A resize settles this long before the new width is asked for (dragging a window edge asks once). */
+export const RESIZE_SETTLE_MS = 250;
+
+/**
+ * The width (device pixels) to ask for a frame box `cssWidth` CSS px wide: rounded up to a step of WIDTH_STEP,
+ * at least one step.
+ * @param {number} cssWidth @param {number} dpr  devicePixelRatio (1 when unknown)
+ */
+export function wantedWidth(cssWidth, dpr) {
+  const k = Number.isFinite(dpr) && dpr > 0 ? dpr : 1;
+  const px = Number.isFinite(cssWidth) && cssWidth > 0 ? Math.ceil(cssWidth * k) : 0;
+  return Math.max(WIDTH_STEP, Math.ceil(px / WIDTH_STEP) * WIDTH_STEP);
+}
+
+/**
+ * The /cell/video/request arguments for a raw stream.
+ * @param {string} topic @param {number} width @returns {{ topic: string, width: number, quality: number }}
+ */
+export const videoRequest = (topic, width) => ({ topic, width: Math.round(width), quality: RAW_QUALITY });
+
+/**
+ * What a /cell/video/request answer gives: the CompressedImage topic to subscribe and its frames' size, or why not.
+ * @param {any} res
+ * @returns {{ ok: true, topic: string, width: number, height: number } | { ok: false, message: string }}
+ */
+export function videoAnswer(res) {
+  if (res?.ok && typeof res.topic === 'string' && res.topic) {
+    return { ok: true, topic: res.topic, width: Number(res.width) || 0, height: Number(res.height) || 0 };
+  }
+  const message = typeof res?.message === 'string' && res.message ? res.message : 'The video service gave no stream';
+  return { ok: false, message };
+}
+
+/**
+ * The level of a diagnostic_msgs/DiagnosticStatus (a byte: a number in JSON, a one-character string from some
+ * encoders). @param {unknown} level
+ */
+function diagLevel(level) {
+  if (typeof level === 'number') return level;
+  if (typeof level === 'string' && level.length === 1) return level.charCodeAt(0);
+  return Number(level) || 0;
+}
+
+/**
+ * What is wrong with the stream `topic` per /cell/video/status (a DiagnosticArray, one status per raw stream,
+ * hardware_id its topic): the message of a WARN (1) or ERROR (2) status, null when fine or not reported.
+ * @param {any} msg @param {string | null | undefined} topic @returns {string | null}
+ */
+export function streamProblem(msg, topic) {
+  if (!topic || !Array.isArray(msg?.status)) return null;
+  const st = msg.status.find((/** @type {any} */ s) => s?.hardware_id === topic);
+  if (!st || diagLevel(st.level) < 1) return null;
+  return typeof st.message === 'string' && st.message ? st.message : diagLevel(st.level) >= 2 ? 'error' : 'warning';
 }
 
 // ---- the binary hot path: CBOR bytes -> Blob -> ImageBitmap -> canvas (no base64, no data: URLs) ----
