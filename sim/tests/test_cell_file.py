@@ -1,6 +1,7 @@
 """The sim takes its device topics and camera streams from the cell file, and refuses a bad file clearly."""
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -24,8 +25,23 @@ def test_demo_cell_maps_to_the_devices_the_ui_shows() -> None:
     d = load_devices(str(ROOT / "config" / "demo-cell.yaml"))
     assert d.wrench_topics == ("/cell/wrench",)
     assert d.tactile_topics == ("/cell/tactile",)
-    assert [(s.topic, s.view) for s in d.streams] == [("/cell/camera/workbench/image/compressed", "workbench"),
-                                                      ("/cell/camera/global/image/compressed", "global")]
+    assert [(s.topic, s.view, s.raw, s.size) for s in d.streams] == [
+        ("/cell/camera/workbench/image/compressed", "workbench", False, None),
+        ("/cell/camera/global/image/compressed", "global", False, None),
+        ("/cell/camera/global/image_raw", "global", True, (1280, 720))]
+
+
+def test_a_wrong_stream_type_or_size_names_the_field(tmp_path) -> None:
+    import yaml
+    doc = yaml.safe_load((ROOT / "config" / "demo-cell.yaml").read_text())
+    for bad, field in (({"type": "h264"}, "video.streams[0].type"), ({"sim_size": [1280]}, "video.streams[0].sim_size")):
+        doc["video"]["streams"][0].update(bad)
+        path = tmp_path / "cell.yaml"
+        path.write_text(yaml.safe_dump(doc))
+        with pytest.raises(CellFileError, match=re.escape(field)):
+            load_devices(str(path))
+        for k in bad:
+            del doc["video"]["streams"][0][k]
 
 
 def test_renamed_cell_every_matching_sensor_and_every_stream() -> None:
