@@ -9,9 +9,11 @@
 //   stall  a client that stops reading (socket paused) for --stall-s seconds (300 by default): BFF RSS growth,
 //          what arrives first after it resumes.
 //   fast   25 clients at 100 Hz, alone and beside one stalled image client: p95 and loss.
-// Options: --cases slow,stall,fast  --slow-s 60  --stall-s 300  --fast-s 20  --bff-dir <dir with src/server.js>
+//   rtt    a client 80 ms away (netem delay 40 ms each way on the same kind of veth), no bandwidth cap: the frame
+//          rate the send window allows, and the age.
+// Options: --cases slow,rtt,stall,fast  --slow-s 60  --rtt-s 30  --stall-s 300  --fast-s 20  --bff-dir <dir with src/server.js>
 //   (--bff-dir lets the same cases run against another copy of bff/, e.g. the relay before the fix).
-//   BENCH_QUICK=1 (npm run bench -- --quick): defaults --slow-s 10 --stall-s 10 --fast-s 2, 2 s of reading before
+//   BENCH_QUICK=1 (npm run bench -- --quick): defaults --slow-s 10 --rtt-s 10 --stall-s 10 --fast-s 2, 2 s of reading before
 //   the stall (5 s), the fast pair once (twice); options still win.
 import { spawn, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
@@ -87,7 +89,7 @@ if (opt('role') === 'upstream') {
 }
 
 async function main() {
-  const cases = opt('cases', 'slow,stall,fast').split(',');
+  const cases = opt('cases', 'slow,rtt,stall,fast').split(',');
   const bffDir = path.resolve(opt('bff-dir', path.join(ROOT, 'bff')));
   const base = Number(opt('port', 48080));
   const up = spawn(process.execPath, [SELF, '--role', 'upstream', '--port', String(base + 2)], { stdio: 'inherit' });
@@ -99,6 +101,7 @@ async function main() {
   try {
     await sleep(300);
     if (cases.includes('slow')) await slowCase(bffDir, base, cleanups);
+    if (cases.includes('rtt')) await rttCase(bffDir, base, cleanups);
     if (cases.includes('stall')) await stallCase(bffDir, base);
     if (cases.includes('fast')) await fastCase(bffDir, base);
   } finally {
@@ -169,6 +172,18 @@ function haveTools() {
 async function slowCase(bffDir, base, cleanups) {
   const secs = Number(opt('slow-s', QUICK ? 10 : 60));
   console.log(`\n== slow link: 0.5 MB/s veth in a namespace of its own, 30 Hz x 30 KB frames, ${secs} s ==`);
+  // 4 mbit/s = 0.5 MB/s each way; a 50 ms queue in the shaper, as a busy Wi-Fi access point might hold.
+  await shapedCase(bffDir, base, cleanups, secs, ['tbf', 'rate', '4mbit', 'burst', '16kb', 'latency', '50ms']);
+}
+
+async function rttCase(bffDir, base, cleanups) {
+  const secs = Number(opt('rtt-s', QUICK ? 10 : 30));
+  console.log(`\n== long link: 80 ms round trip (40 ms each way), no bandwidth cap, 30 Hz x 30 KB frames, ${secs} s ==`);
+  await shapedCase(bffDir, base, cleanups, secs, ['netem', 'delay', '40ms', 'limit', '10000']);
+}
+
+/** One image client in a network namespace joined by a veth pair whose both ends have the qdisc `qdisc`. */
+async function shapedCase(bffDir, base, cleanups, secs, qdisc) {
   const why = haveTools();
   if (why) { console.log(`skipped: ${why}`); return; }
   const id = `${process.pid % 100000}`;
@@ -182,9 +197,8 @@ async function slowCase(bffDir, base, cleanups) {
   run('ip', '-n', ns, 'addr', 'add', '10.250.0.2/30', 'dev', v1);
   run('ip', '-n', ns, 'link', 'set', v1, 'up');
   run('ip', '-n', ns, 'link', 'set', 'lo', 'up');
-  // 4 mbit/s = 0.5 MB/s each way; a 50 ms queue in the shaper, as a busy Wi-Fi access point might hold.
-  run('tc', 'qdisc', 'add', 'dev', v0, 'root', 'tbf', 'rate', '4mbit', 'burst', '16kb', 'latency', '50ms');
-  run('ip', 'netns', 'exec', ns, 'tc', 'qdisc', 'add', 'dev', v1, 'root', 'tbf', 'rate', '4mbit', 'burst', '16kb', 'latency', '50ms');
+  run('tc', 'qdisc', 'add', 'dev', v0, 'root', ...qdisc);
+  run('ip', 'netns', 'exec', ns, 'tc', 'qdisc', 'add', 'dev', v1, 'root', ...qdisc);
   const bff = await startBff(bffDir, base, '10.250.0.1');
   try {
     const rss0 = rssMb(bff.pid);

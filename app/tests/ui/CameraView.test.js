@@ -5,7 +5,7 @@ import CameraView from '../../src/lib/ui/CameraView.svelte';
 import {
   imageSrc, imageMime, bytesToBase64, cameraStreams, frameBytes, LatestFrameDecoder, FrameStats, staleAfterMs, shortAge,
   frameStatus, clampView, zoomAt, panView, pinchView, containRect, IDENTITY, ZOOM_MAX, wantedWidth, videoRequest,
-  videoAnswer, streamProblem, RAW_QUALITY,
+  videoAnswer, streamProblem, RAW_QUALITY, RETRY_MS,
 } from '../../src/lib/ui/camera.js';
 import { NotConnectedError } from '../../src/lib/core/connection.svelte.js';
 
@@ -473,6 +473,26 @@ describe('CameraView: raw streams (asked of the video service)', () => {
     expect(s.live.size).toBe(0);
     vi.advanceTimersByTime(10_000);
     expect(svc.calls).toHaveLength(3);
+  });
+
+  it('no frame for 3 s after an answer (a video node that restarted forgot the output): asked again, the subscription kept', async () => {
+    vi.useFakeTimers({ toFake: ['setTimeout', 'clearTimeout'] });
+    const s = fakeSubscribe();
+    const svc = fakeService();
+    render(CameraView, { streams: rawStreams, subscribe: s.subscribe, callService: svc.callService, decode: fakeDecode().decode });
+    svc.calls[0].resolve(ok(160));
+    await settle();
+    const subscribed = s.subscribe.mock.calls.filter((c) => c[0] === OUT(160)).length;
+    vi.advanceTimersByTime(RETRY_MS);
+    expect(svc.calls).toHaveLength(2);
+    expect(svc.calls[1].args).toEqual({ topic: RAW, width: 160, quality: 70 });
+    svc.calls[1].resolve(ok(160));
+    await settle();
+    expect(s.subscribe.mock.calls.filter((c) => c[0] === OUT(160)).length).toBe(subscribed);
+    // Frames flow: nothing more is asked.
+    s.live.get(OUT(160))?.({ format: 'jpeg', data: JPEG });
+    vi.advanceTimersByTime(RETRY_MS);
+    expect(svc.calls).toHaveLength(2);
   });
 
   it('nothing is asked or subscribed while the page is hidden; back visible, it asks first', async () => {

@@ -13,6 +13,10 @@ import { decode as cborDecode } from 'cbor-x';
 
 /** @typedef {{data: Buffer, binary: boolean, seq: number, lane?: string}} OutFrame */
 
+/** the send window's delivery rate is the best sample of this long (ms), at most this many samples */
+const RATE_SPAN_MS = 10_000;
+const RATE_SAMPLES = 64;
+
 export const DEFAULTS = Object.freeze({
   /** lane bound when a subscription gives no queue_length (or 0, roslib's default): the newest message only */
   defaultQueueLength: 1,
@@ -20,8 +24,11 @@ export const DEFAULTS = Object.freeze({
   maxQueueLength: 100,
   /** unsent non-droppable replies per client before it is disconnected */
   maxReplyBytes: 8 * 1024 * 1024,
-  /** bytes written but not confirmed read (pong) before the relay stops writing to that client */
+  /** bytes written but not confirmed read (pong) before the relay stops writing to that client: the least
+   * window; it grows to twice what the link delivers in its shortest round trip (SendWindow) */
   windowBytes: 48 * 1024,
+  /** the most the send window grows to */
+  maxWindowBytes: 4 * 1024 * 1024,
   /** a ping follows at least every this many written bytes (and always when the window fills) */
   pingEveryBytes: 12 * 1024,
 });
@@ -180,17 +187,37 @@ export class ClientOutbox {
   }
 }
 
+/**
+ * How many bytes may be written to one browser before it confirms reading them (a WebSocket ping after the
+ * bytes, its pong back). A fixed window allows one window per round trip: 48 KiB over an 80 ms link is 600 KB/s,
+ * fewer than 30 frames of 30 KB a second. So the window follows the link, as BBR sizes its congestion window:
+ * twice the delivery rate (the best sample of the last 10 s) times the round trip (the least seen on this
+ * connection: a probe() when it opens, before any frame is in flight), never below `windowBytes` nor above
+ * `maxWindowBytes`. On a slow link that round trip is the link's own, without our frames queued in it, so the
+ * window stays at `windowBytes` there (a larger one would only queue older frames); on a long fast link it
+ * grows until the stream's own rate is delivered.
+ */
 export class SendWindow {
-  /** @param {Partial<Pick<typeof DEFAULTS, 'windowBytes'|'pingEveryBytes'>>} [o] */
-  constructor(o = {}) {
-    this.windowBytes = o.windowBytes ?? DEFAULTS.windowBytes;
+  /**
+   * @param {Partial<Pick<typeof DEFAULTS, 'windowBytes'|'pingEveryBytes'|'maxWindowBytes'>>} [o]
+   * @param {() => number} [now] ms
+   */
+  constructor(o = {}, now = () => performance.now()) {
+    this.minWindowBytes = o.windowBytes ?? DEFAULTS.windowBytes;
+    this.maxWindowBytes = Math.max(this.minWindowBytes, o.maxWindowBytes ?? DEFAULTS.maxWindowBytes);
+    this.windowBytes = this.minWindowBytes;
     this.pingEveryBytes = o.pingEveryBytes ?? DEFAULTS.pingEveryBytes;
+    this.now = now;
     this.sentBytes = 0;
     this.ackedBytes = 0;
     this.pingedAt = 0;
     this.pingSeq = 0;
-    /** @type {Map<string, number>} ping payload -> sentBytes when it was written */
+    /** @type {Map<string, {bytes: number, at: number, acked: number}>} ping payload -> sentBytes, time and ackedBytes when it was written */
     this.pings = new Map();
+    /** @type {{at: number, rate: number}[]} delivery rate samples (bytes/ms) of the last RATE_SPAN_MS */
+    this.rates = [];
+    this.minRttMs = Infinity;
+    this.rate = 0;
   }
 
   /** Bytes written and not yet confirmed read. */
@@ -208,17 +235,36 @@ export class SendWindow {
     if (this.sentBytes - this.pingedAt < this.pingEveryBytes && this.open()) return null;
     this.pingedAt = this.sentBytes;
     const payload = `bp${++this.pingSeq}`;
-    this.pings.set(payload, this.sentBytes);
+    this.pings.set(payload, { bytes: this.sentBytes, at: this.now(), acked: this.ackedBytes });
     // Only a bounded number of pings is ever outstanding: each one needs pingEveryBytes or a full window.
+    return payload;
+  }
+
+  /**
+   * A ping to write now, before anything is in flight (the socket just opened): its round trip is the link's own,
+   * not our frames' queue. @returns {string} its payload
+   */
+  probe() {
+    const payload = `bp${++this.pingSeq}`;
+    this.pings.set(payload, { bytes: this.sentBytes, at: this.now(), acked: this.ackedBytes });
     return payload;
   }
 
   /** A pong arrived. @param {string} payload @returns {boolean} whether it was one of ours */
   pong(payload) {
-    const at = this.pings.get(payload);
-    if (at === undefined) return false;
-    for (const [k, v] of this.pings) { if (v > at) break; this.pings.delete(k); }
-    if (at > this.ackedBytes) this.ackedBytes = at;
+    const ping = this.pings.get(payload);
+    if (ping === undefined) return false;
+    for (const [k, v] of this.pings) { if (v.bytes > ping.bytes) break; this.pings.delete(k); }
+    const t = this.now();
+    const rtt = Math.max(0.1, t - ping.at);
+    // What was unconfirmed when the ping went out has been read by its pong: the link's rate over that round trip.
+    const rate = (ping.bytes - ping.acked) / rtt;
+    if (ping.bytes > this.ackedBytes) this.ackedBytes = ping.bytes;
+    this.minRttMs = Math.min(this.minRttMs, rtt);
+    this.rates.push({ at: t, rate });
+    while (this.rates.length > RATE_SAMPLES || this.rates[0].at < t - RATE_SPAN_MS) this.rates.shift();
+    this.rate = Math.max(...this.rates.map((x) => x.rate));
+    this.windowBytes = Math.round(Math.min(this.maxWindowBytes, Math.max(this.minWindowBytes, 2 * this.rate * this.minRttMs)));
     return true;
   }
 }

@@ -102,6 +102,8 @@ export class RosRelay {
     };
     const afterWrite = () => { if (outbox.length) pump(); };
     ws.on('pong', (d) => { if (window.pong(d.toString('latin1')) && outbox.length) pump(); });
+    // The link's own round trip, before any frame is in flight: what the send window grows from.
+    ws.ping(window.probe());
     /** @param {Buffer|string} data @param {boolean} isBinary */
     const out = (data, isBinary) => {
       if (closed || ws.readyState !== WebSocket.OPEN) return;
@@ -140,7 +142,7 @@ export class RosRelay {
     return [...this.clients.values()].map(({ session, outbox, window }) => ({
       username: session.username, queuedBytes: outbox.queuedBytes, peakQueuedBytes: outbox.peakQueuedBytes,
       replyBytes: outbox.replyBytes, dropped: outbox.dropped, droppedBytes: outbox.droppedBytes,
-      sentBytes: window.sentBytes, unacked: window.unacked,
+      sentBytes: window.sentBytes, unacked: window.unacked, windowBytes: window.windowBytes, minRttMs: window.minRttMs,
     }));
   }
 
