@@ -12,6 +12,7 @@
 //   rtt    a client 80 ms away (netem delay 40 ms each way on the same kind of veth), no bandwidth cap: the frame
 //          rate the send window allows, and the age.
 // Options: --cases slow,rtt,stall,fast  --slow-s 60  --rtt-s 30  --stall-s 300  --fast-s 20  --bff-dir <dir with src/server.js>
+//   --frame-kb 30 (the image frames' size: e.g. what the video node sends a phone, bench/video_bench.mjs)
 //   (--bff-dir lets the same cases run against another copy of bff/, e.g. the relay before the fix).
 //   BENCH_QUICK=1 (npm run bench -- --quick): defaults --slow-s 10 --rtt-s 10 --stall-s 10 --fast-s 2, 2 s of reading before
 //   the stall (5 s), the fast pair once (twice); options still win.
@@ -36,7 +37,7 @@ const pct = (xs, p) => { const s = [...xs].sort((a, b) => a - b); return s.lengt
 const rssMb = (pid) => { try { return Number(/VmRSS:\s+(\d+)/.exec(fs.readFileSync(`/proc/${pid}/status`, 'utf8'))[1]) / 1024; } catch { return NaN; } };
 const IMAGE = '/cell/bench/image';
 const ARRAY = '/cell/bench';
-const FRAME_BYTES = 30 * 1024;
+const FRAME_BYTES = Number(opt('frame-kb', 30)) * 1024;
 const imageSub = { op: 'subscribe', id: 'img', topic: IMAGE, type: 'sensor_msgs/CompressedImage', queue_length: 1, compression: 'cbor' };
 const stampMs = (m) => m.msg.header.stamp.secs * 1000 + m.msg.header.stamp.nsecs / 1e6;
 
@@ -92,7 +93,7 @@ async function main() {
   const cases = opt('cases', 'slow,rtt,stall,fast').split(',');
   const bffDir = path.resolve(opt('bff-dir', path.join(ROOT, 'bff')));
   const base = Number(opt('port', 48080));
-  const up = spawn(process.execPath, [SELF, '--role', 'upstream', '--port', String(base + 2)], { stdio: 'inherit' });
+  const up = spawn(process.execPath, [SELF, '--role', 'upstream', '--port', String(base + 2), '--frame-kb', String(FRAME_BYTES / 1024)], { stdio: 'inherit' });
   /** @type {(() => void)[]} */
   const cleanups = [() => up.kill('SIGTERM')];
   const cleanup = () => { while (cleanups.length) { try { /** @type {() => void} */ (cleanups.pop())(); } catch { /* best effort */ } } };
@@ -171,14 +172,14 @@ function haveTools() {
 
 async function slowCase(bffDir, base, cleanups) {
   const secs = Number(opt('slow-s', QUICK ? 10 : 60));
-  console.log(`\n== slow link: 0.5 MB/s veth in a namespace of its own, 30 Hz x 30 KB frames, ${secs} s ==`);
+  console.log(`\n== slow link: 0.5 MB/s veth in a namespace of its own, 30 Hz x ${FRAME_BYTES / 1024} KB frames, ${secs} s ==`);
   // 4 mbit/s = 0.5 MB/s each way; a 50 ms queue in the shaper, as a busy Wi-Fi access point might hold.
   await shapedCase(bffDir, base, cleanups, secs, ['tbf', 'rate', '4mbit', 'burst', '16kb', 'latency', '50ms']);
 }
 
 async function rttCase(bffDir, base, cleanups) {
   const secs = Number(opt('rtt-s', QUICK ? 10 : 30));
-  console.log(`\n== long link: 80 ms round trip (40 ms each way), no bandwidth cap, 30 Hz x 30 KB frames, ${secs} s ==`);
+  console.log(`\n== long link: 80 ms round trip (40 ms each way), no bandwidth cap, 30 Hz x ${FRAME_BYTES / 1024} KB frames, ${secs} s ==`);
   await shapedCase(bffDir, base, cleanups, secs, ['netem', 'delay', '40ms', 'limit', '10000']);
 }
 
