@@ -34,14 +34,15 @@ class BridgeProcess:
     """A rosbridge_server node in its own process (rospy allows one node per process)."""
 
     def __init__(self, port: Optional[int] = None, params: Optional[Dict[str, object]] = None,
-                 name: Optional[str] = None) -> None:
+                 name: Optional[str] = None, env: Optional[Dict[str, str]] = None) -> None:
         self.port = port or free_port()
         self.name = name or f"rosbridge_{self.port}"
         args = [sys.executable, str(SERVER), f"__name:={self.name}", f"_port:={self.port}"]
         args += [f"_{k}:={v}" for k, v in (params or {}).items()]
         self.log_path = pathlib.Path(os.environ.get("ROS_LOG_DIR", "/tmp")) / f"{self.name}.out"
         self._log = open(self.log_path, "wb")
-        self.proc = subprocess.Popen(args, stdout=self._log, stderr=subprocess.STDOUT, start_new_session=True)
+        self.proc = subprocess.Popen(args, stdout=self._log, stderr=subprocess.STDOUT, start_new_session=True,
+                                     env=dict(os.environ, **(env or {})))
         wait_for(lambda: port_open(self.port) or self.proc.poll() is not None, 20, what="rosbridge port")
         assert self.proc.poll() is None, self.log()
 

@@ -14,7 +14,7 @@ import rospy
 
 from .. import conversion
 from ..op_base import ProtocolError, check, require
-from ..ros_plumbing import resolve_topic
+from ..ros_plumbing import master, resolve_topic
 
 _request_ids = itertools.count(1)
 
@@ -73,8 +73,7 @@ class AdvertisedService:
 
 def _other_providers(name: str) -> list:
     """Nodes other than this one serving `name`: the master would silently hand the name to us."""
-    import rosgraph
-    _, _, services = rosgraph.Master(rospy.get_name()).getSystemState()
+    _, _, services = master.getSystemState()
     me = rospy.get_name()
     return [n for s, nodes in services if s == name for n in nodes if n != me]
 
