@@ -67,11 +67,22 @@ async function login() {
   return String(r.headers.get('set-cookie')).split(';')[0];
 }
 
+/** A JPEG's width x height from its SOF marker. @param {Uint8Array} b */
+function jpegSize(b) {
+  for (let i = 2; i + 9 < b.length;) {
+    if (b[i] !== 0xff) return '?';
+    const marker = b[i + 1];
+    if (marker >= 0xc0 && marker <= 0xc3) return `${(b[i + 7] << 8) | b[i + 8]}x${(b[i + 5] << 8) | b[i + 6]}`;
+    i += 2 + ((b[i + 2] << 8) | b[i + 3]);
+  }
+  return '?';
+}
+
 /** One viewer: asks for its size (raw) or subscribes the JPEG topic, and records each frame's age and size. */
 async function viewer(cookie, raw) {
   const ws = new WebSocket(`${base.replace('http', 'ws')}/ros`, { headers: { cookie } });
   await new Promise((res, rej) => { ws.once('open', res); ws.once('error', rej); });
-  /** @type {{at: number, age: number, bytes: number}[]} */
+  /** @type {{at: number, age: number, bytes: number, size: string}[]} */
   const frames = [];
   let asked = null;
   ws.on('message', (d, binary) => {
@@ -80,7 +91,7 @@ async function viewer(cookie, raw) {
     if (m.op === 'publish' && m.msg?.header) {
       const t = Date.now();
       const s = m.msg.header.stamp;
-      frames.push({ at: t, age: t - (s.secs * 1000 + s.nsecs / 1e6), bytes: m.msg.data.length });
+      frames.push({ at: t, age: t - (s.secs * 1000 + s.nsecs / 1e6), bytes: m.msg.data.length, size: jpegSize(m.msg.data) });
     }
   });
   let topic = JPEG;
@@ -114,11 +125,11 @@ async function measure(label, raw, cookie) {
   }
   const rows = vs.map((v) => v.frames.filter((f) => f.at >= t0 && f.at < t1));
   const all = rows.flat();
-  console.log(`\n${label}${raw ? ` (asked ${WIDTH} px: ${vs[0].asked.width}x${vs[0].asked.height} on ${vs[0].topic})` : ''}`);
+  console.log(`\n${label}: frames of ${[...new Set(all.map((f) => f.size))].join(', ')} px${raw ? ` (asked ${WIDTH} px wide, on ${vs[0].topic})` : ''}`);
   console.log(`  per viewer: ${rows.map((r) => `${(r.length / SECONDS).toFixed(1)} fps / age p95 ${pct(r.map((f) => f.age), 95).toFixed(0)} ms`).join(', ')}`);
   console.log(`  all viewers: age p50 ${pct(all.map((f) => f.age), 50).toFixed(0)} ms, p95 ${pct(all.map((f) => f.age), 95).toFixed(0)} ms; ${(all.reduce((a, f) => a + f.bytes, 0) / Math.max(1, all.length) / 1024).toFixed(1)} KiB per frame; ${(all.reduce((a, f) => a + f.bytes, 0) / SECONDS / 1024 / 1024).toFixed(2)} MiB/s to the ${VIEWERS} viewers`);
-  const show = ['video', 'bff', 'rosbridge_websocket', 'video_bench_camera'];
-  console.log(`  CPU % of one core: ${show.map((n) => `${n === 'video_bench_camera' ? 'camera driver (not ours)' : n} ${(cpu[n] ?? 0).toFixed(0)}`).join(', ')}`);
+  const show = ['video', 'bff', 'rosbridge_websocket'];
+  console.log(`  CPU % of one core: ${show.map((n) => `${n} ${(cpu[n] ?? 0).toFixed(0)}`).join(', ')} (the camera driver's own encoding not counted)`);
   for (const v of vs) v.ws.close();
   await sleep(3000);   // the video node leaves the camera; the next case starts clean
 }
@@ -133,6 +144,6 @@ try {
   await measure('raw stream through the video node, JPEG sized to the phone', true, cookie);
   await measure('reference: the publisher\'s full-size JPEG (quality 80) to each viewer', false, cookie);
 } finally {
-  driver?.kill('SIGINT');
+  driver?.kill('SIGTERM');
   await stopStack(stack.proc);
 }
