@@ -142,11 +142,8 @@ class CameraRig:
         self.world = world
         self.size = size
         self.period = 1.0 / rate
-        ctx = mp.get_context("spawn")  # fork would copy the physics client and running threads
-        self.conn, child = ctx.Pipe()
-        self.proc = ctx.Process(target=_render_main, args=(child, world.seed, world.urdf_dir, size, world.spec),
-                                name="sim-cameras", daemon=True)
-        self.proc.start()
+        self.restarts = 0
+        self._spawn()
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
         self.renderer = "?"
@@ -164,12 +161,32 @@ class CameraRig:
         self._thread = threading.Thread(target=self._loop, args=(controller, publish, watched), name="cameras", daemon=True)
         self._thread.start()
 
+    def _spawn(self) -> None:
+        ctx = mp.get_context("spawn")  # fork would copy the physics client and running threads
+        self.conn, child = ctx.Pipe()
+        w = self.world
+        self.proc = ctx.Process(target=_render_main, args=(child, w.seed, w.urdf_dir, self.size, w.spec),
+                                name="sim-cameras", daemon=True)
+        self.proc.start()
+
     def _loop(self, controller, publish, watched) -> None:
-        try:
-            self._render_frames(controller, publish, watched)
-        except (EOFError, OSError, ValueError) as e:  # the render process went away (normally: stopping)
-            if not self._stop.is_set():
-                log.error("camera process lost: %s", e)
+        # A renderer that dies (a crash in the GL stack: a soak once saw llvmpipe's EGL renderer segfault after
+        # minutes) is started again, a little later each time, rather than leaving the cell without cameras.
+        while True:
+            try:
+                self._render_frames(controller, publish, watched)
+                return
+            except (EOFError, OSError, ValueError) as e:  # the render process went away (normally: stopping)
+                if self._stop.is_set():
+                    return
+                self.restarts += 1
+                log.error("camera process lost (%s, exit code %s): starting it again", e or type(e).__name__,
+                          self.proc.exitcode)
+                self.ready = False
+                self._end_process()
+                if self._stop.wait(min(10.0, float(self.restarts))):
+                    return
+                self._spawn()
 
     def _render_frames(self, controller, publish, watched) -> None:
         deadline = time.monotonic() + 60
@@ -177,8 +194,7 @@ class CameraRig:
             if self._stop.is_set():
                 return
             if time.monotonic() > deadline or not self.proc.is_alive():
-                log.error("camera process did not start")
-                return
+                raise EOFError("the camera process did not start")
         _, self.renderer = self.conn.recv()
         self.ready = True
         log.info("cameras: %dx%d at %.3g Hz, renderer %s", self.size[0], self.size[1], 1 / self.period, self.renderer)
@@ -194,8 +210,10 @@ class CameraRig:
                 snap = self.world.snapshot()
             self.conn.send((snap, wanted, raw))
             while not self.conn.poll(0.05):
-                if self._stop.is_set() or not self.proc.is_alive():
+                if self._stop.is_set():
                     return
+                if not self.proc.is_alive():
+                    raise EOFError("the camera process exited")
             frames = self.conn.recv()
             for name, jpeg, ms, raws in frames:
                 self.render_ms.append(ms)
@@ -225,9 +243,12 @@ class CameraRig:
             except (OSError, BrokenPipeError):
                 pass
             self.proc.join(0.2)
+        self._end_process()
+
+    def _end_process(self) -> None:
         if self.proc.is_alive():  # still starting up or stuck in a frame: it holds no state worth saving
             self.proc.terminate()
             self.proc.join(0.3)
         if self.proc.is_alive():
             self.proc.kill()
-            self.proc.join(0.2)
+        self.proc.join(0.2)

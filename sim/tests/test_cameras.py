@@ -77,6 +77,27 @@ def test_raw_pixels_keep_the_aspect_of_the_size_asked() -> None:
     assert wide[:, :50].min() == 255 and wide[:, 70:].max() == 0
 
 
+def test_a_render_process_that_dies_is_started_again() -> None:
+    """A crash in the GL stack (a soak once saw the EGL renderer segfault) must not leave the cell without cameras."""
+    import os
+    import signal
+    world = World(seed=0)
+    rig = CameraRig(world, (96, 72), rate=20.0)
+    got: list[str] = []
+    rig.start(_Controller(), lambda name, jpeg: got.append(name), lambda: {"workbench"})
+    try:
+        wait_for(lambda: len(got) >= 3, 60, what="frames")
+        first = rig.proc.pid
+        os.kill(first, signal.SIGKILL)
+        wait_for(lambda: rig.restarts == 1 and rig.proc.pid != first, 30, what="a new render process")
+        n = len(got)
+        wait_for(lambda: len(got) >= n + 3, 60, what="frames from the new render process")
+    finally:
+        rig.stop()
+        world.close()
+    assert not rig.proc.is_alive()
+
+
 def wait_for_quiet(predicate, seconds: float) -> bool:
     """True as soon as `predicate` holds within `seconds`; False if it never does (what this test wants)."""
     try:
