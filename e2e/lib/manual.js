@@ -24,11 +24,19 @@ export async function openManual(page, who = 'admin') {
   await expect(page.getByTestId('page-title')).toHaveText(cell.pages.find((/** @type {any} */ p) => p.id === 'manual').title);
 }
 
-/** Wait for the arm to stand still, then check it stays still. @param {import('./robot.js').RobotWatch} robot */
+/**
+ * Wait for the arm to come to rest and stay at rest for STILL.messages joint states (within `timeout`). A release
+ * that a stalled host delivers together with the heartbeats before it may first let the jog go on for a moment (the
+ * driver jogs on when a stalled link's heartbeats come again, docs/ros-interfaces.md): CI once saw the arm at rest
+ * at the release, then 0.14 rad/s. What must hold is that it stops and stays stopped; a jog that goes on never
+ * shows a still window and fails here.
+ * @param {import('./robot.js').RobotWatch} robot
+ */
 export async function expectStandstill(robot, timeout = 3_000) {
-  await expect.poll(() => robot.speed(), { timeout, intervals: [20] }).toBeLessThan(1e-3);
-  const after = await robot.observe(STILL.messages);
-  expect(after.travel, `travel over the ${STILL.messages} joint states after the arm stood still (their largest speed: ${after.maxSpeed} rad/s)`).toBeLessThan(STILL.rad);
+  const end = Date.now() + timeout;
+  let after = await robot.observe(STILL.messages);
+  while (!(after.travel < STILL.rad && after.maxSpeed < STILL.speed) && Date.now() < end) after = await robot.observe(STILL.messages);
+  expect(after.travel, `travel over the last ${STILL.messages} joint states, ${timeout} ms after the release (their largest speed: ${after.maxSpeed} rad/s)`).toBeLessThan(STILL.rad);
   expect(after.maxSpeed, `the largest joint speed over those ${STILL.messages} joint states`).toBeLessThan(STILL.speed);
 }
 
