@@ -9,7 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-read -r -a NAMES <<< 'rosbridge relay sim manual manual-iiwa sensors scene backpressure video recorder logstorm soak'
+read -r -a NAMES <<< 'rosbridge relay sim manual manual-iiwa sensors scene backpressure video image-relay recorder logstorm soak'
 declare -A WHAT=(
   [rosbridge]='rosbridge server (direct)'
   [relay]='BFF relay path'
@@ -20,17 +20,18 @@ declare -A WHAT=(
   [scene]='3D view while the arm moves: desktop, and a phone with the CPU throttled 4x'
   [backpressure]='BFF back-pressure: slow link, 80 ms link, stalled reader, fast clients beside a stalled one'
   [video]='raw 720p camera at 30 Hz to 5 phone viewers through the video node and the BFF, against full-size JPEG to each'
+  [image-relay]='relay CPU per image frame: a 30 Hz x 30 KB JPEG to 5 viewers, rosbridge_suite direct vs ours direct vs the BFF path (reference: bench/reference/rosbridge_suite.sh setup)'
   [recorder]='flight recorder: CPU and RSS of the recorder node with the demo cell running its process, a save'
   [logstorm]='ROS log storm (1 kHz for 60 s) with the Inspect page open on a tablet: RSS of the BFF, inspect node, rosout, rosbridge; page fps and a filter click'
   [soak]='25 clients through the BFF beside the simulated cell (camera viewer, jog session, running process) for minutes: RSS of every process, log errors, liveness'
 )
 declare -A FULL=(
   [rosbridge]='7 scenarios x 5 s' [relay]='3 x 5 s' [sim]='15 s' [manual]='5 runs each' [manual-iiwa]='5 runs each'
-  [sensors]='3 x 10 s' [scene]='4 x 8 s' [backpressure]='slow 60 s, rtt 30 s, stall 300 s, fast 4 x 20 s' [video]='2 x 20 s' [recorder]='150 s' [logstorm]='60 s' [soak]='10 x 1 min (by name only)'
+  [sensors]='3 x 10 s' [scene]='4 x 8 s' [backpressure]='slow 60 s, rtt 30 s, stall 300 s, fast 4 x 20 s' [video]='2 x 20 s' [image-relay]='3 rounds x 3 x 15 s' [recorder]='150 s' [logstorm]='60 s' [soak]='10 x 1 min (by name only)'
 )
 declare -A QUICK=(
   [rosbridge]='7 x 1.5 s' [relay]='3 x 1.5 s' [sim]='4 s' [manual]='3 runs each' [manual-iiwa]='3 runs each'
-  [sensors]='3 x 3 s' [scene]='4 x 3 s' [backpressure]='slow 10 s, rtt 10 s, stall 10 s, fast 2 x 2 s' [video]='2 x 5 s' [recorder]='25 s' [logstorm]='15 s' [soak]='3 "minutes" of 8 s'
+  [sensors]='3 x 3 s' [scene]='4 x 3 s' [backpressure]='slow 10 s, rtt 10 s, stall 10 s, fast 2 x 2 s' [video]='2 x 5 s' [image-relay]='3 x 5 s' [recorder]='25 s' [logstorm]='15 s' [soak]='3 "minutes" of 8 s'
 )
 
 usage() {
@@ -83,6 +84,7 @@ run_one() {
     scene) node bench/scene_bench.mjs ;;
     backpressure) node bench/bff_backpressure_bench.mjs ;;
     video) node bench/video_bench.mjs ;;
+    image-relay) node bench/image_relay_bench.mjs ;;
     recorder) python bench/recorder_bench.py ;;
     logstorm) node bench/logstorm_bench.mjs ;;
     soak) node bench/soak_bench.mjs ${soak_args[@]+"${soak_args[@]}"} ;;

@@ -5,7 +5,7 @@ import CameraView from '../../src/lib/ui/CameraView.svelte';
 import {
   imageSrc, imageMime, bytesToBase64, cameraStreams, frameBytes, LatestFrameDecoder, FrameStats, staleAfterMs, shortAge,
   frameStatus, clampView, zoomAt, panView, pinchView, containRect, IDENTITY, ZOOM_MAX, wantedWidth, videoRequest,
-  videoAnswer, streamProblem, RAW_QUALITY, RETRY_MS,
+  videoAnswer, streamProblem, RAW_QUALITY, RETRY_MS, LinkAdapter, LINK_LEVELS, sourceFps,
 } from '../../src/lib/ui/camera.js';
 import { NotConnectedError } from '../../src/lib/core/connection.svelte.js';
 
@@ -105,6 +105,58 @@ describe('camera.js', () => {
       .toEqual({ ok: false, message: '/x is not a raw camera stream of the cell file' });
     expect(videoAnswer({ ok: true, topic: '' })).toMatchObject({ ok: false });
     expect(videoAnswer(undefined)).toMatchObject({ ok: false, message: expect.any(String) });
+  });
+
+  it('link adapter: short of the rate for 4 s asks one level smaller (quality first, then width); keeping up 15 s tries one better', () => {
+    const a = new LinkAdapter();
+    expect(a.ask(1280)).toEqual({ width: 1280, quality: RAW_QUALITY });
+    let t = 10_000;
+    const run = (/** @type {number} */ ms, /** @type {number} */ got, expected = 30) => {
+      let changed = 0;
+      for (const end = t + ms; t < end; t += 250) if (a.update(t, got, expected)) changed++;
+      return changed;
+    };
+    expect(run(3750, 12)).toBe(0);           // 40 % of the rate, not yet 4 s
+    expect(run(500, 12)).toBe(1);
+    expect(a.level).toBe(1);
+    expect(a.ask(1280)).toEqual({ width: 1280, quality: 50 });
+    expect(run(2750, 5)).toBe(0);            // settling: the new frames are not judged yet
+    expect(run(11_500, 12)).toBe(2);
+    expect(a.ask(1280)).toEqual({ width: 640, quality: 30 });    // level 3: half the width
+    expect(a.ask(1170).width % 160).toBe(0);
+    run(60_000, 10);                         // short for ever: the last level, no further
+    expect(a.level).toBe(LINK_LEVELS.length - 1);
+    expect(a.ask(1280)).toEqual({ width: 320, quality: 30 });
+    // between 70 and 90 %: neither down nor up
+    const lvl = a.level;
+    expect(run(30_000, 24)).toBe(0);
+    expect(a.level).toBe(lvl);
+    expect(run(14_750, 29.5)).toBe(0);        // keeping up: 15 s before a try
+    expect(run(500, 29.5)).toBe(1);
+    expect(a.level).toBe(lvl - 1);
+    // the try fails within 10 s: back down, and the next try waits twice as long
+    expect(run(7500, 12)).toBe(1);
+    expect(a.level).toBe(lvl);
+    expect(run(29_000, 30)).toBe(0);
+    expect(run(4000, 30)).toBe(1);        // 30 s of keeping up after the settling
+    // not known (no status yet), or a stream with no rate: nothing changes
+    const b = new LinkAdapter();
+    for (let i = 0; i < 100; i++) expect(b.update(i * 250, 0, 0)).toBe(false);
+    b.update(30_000, 1, 30); b.update(34_000, 1, 30);
+    expect(b.level).toBe(1);
+    b.reset(40_000);
+    expect(b.level).toBe(0);
+  });
+
+  it('source fps: the "fps" value of the stream\'s status, 0 when not reported', () => {
+    const msg = { status: [
+      { hardware_id: '/a', values: [{ key: 'topic', value: '/a' }, { key: 'fps', value: '29.5' }] },
+      { hardware_id: '/b', values: [{ key: 'fps', value: 'n/a' }] },
+    ] };
+    expect(sourceFps(msg, '/a')).toBe(29.5);
+    expect(sourceFps(msg, '/b')).toBe(0);
+    expect(sourceFps(msg, '/c')).toBe(0);
+    expect(sourceFps(null, '/a')).toBe(0);
   });
 
   it('stream problem: the message of a WARN or ERROR status whose hardware_id is the stream', () => {
@@ -493,6 +545,39 @@ describe('CameraView: raw streams (asked of the video service)', () => {
     s.live.get(OUT(160))?.({ format: 'jpeg', data: JPEG });
     vi.advanceTimersByTime(RETRY_MS);
     expect(svc.calls).toHaveLength(2);
+  });
+
+  it('frames arriving at a third of the camera\'s rate: after some seconds it asks a lower quality and moves to that topic', async () => {
+    vi.useFakeTimers({ toFake: ['setTimeout', 'clearTimeout', 'setInterval', 'clearInterval', 'Date'] });
+    const s = fakeSubscribe();
+    const svc = fakeService();
+    render(CameraView, { streams: rawStreams, subscribe: s.subscribe, callService: svc.callService, decode: fakeDecode().decode, throttleMs: 20 });
+    const root = screen.getByTestId('camera');
+    svc.calls[0].resolve(ok(160));
+    await settle();
+    s.live.get('/cell/video/status')?.({ status: [{ level: 0, hardware_id: RAW, message: 'ok', values: [{ key: 'fps', value: '30.0' }] }] });
+    expect(root.dataset.linkLevel).toBe('0');
+    // 10 frames a second of 30 for 6 s: still at the first level (3 s settling, then 4 s short)
+    for (let i = 0; i < 60; i++) {
+      s.live.get(OUT(160))?.({ format: 'jpeg', data: JPEG });
+      vi.advanceTimersByTime(100);
+      flushSync();
+    }
+    expect(svc.calls.map((c) => c.args.quality)).not.toContain(50);
+    for (let i = 0; i < 30 && !svc.calls.some((c) => c.args.quality === 50); i++) {
+      s.live.get(OUT(160))?.({ format: 'jpeg', data: JPEG });
+      vi.advanceTimersByTime(100);
+      flushSync();
+    }
+    const asked = svc.calls.find((c) => c.args.quality === 50);
+    expect(asked?.args).toEqual({ topic: RAW, width: 160, quality: 50 });
+    expect(root.dataset.linkLevel).toBe('1');
+    expect(screen.getByTestId('camera-link').textContent).toMatch(/slow link/);
+    asked?.resolve({ ...ok(160), topic: '/cell/video/cell_camera_arm_image_raw/w160_q50', quality: 50 });
+    await settle();
+    expect(s.live.has('/cell/video/cell_camera_arm_image_raw/w160_q50')).toBe(true);
+    expect(s.live.has(OUT(160))).toBe(false);
+    expect(root.dataset.requestQuality).toBe('50');
   });
 
   it('nothing is asked or subscribed while the page is hidden; back visible, it asks first', async () => {

@@ -61,7 +61,7 @@ test('outbox: replies are never dropped, keep their order among messages, and re
 });
 
 test('send window: closes after windowBytes unconfirmed, a ping always follows the last write, its pong reopens it', () => {
-  const w = new SendWindow({ windowBytes: 64_000, pingEveryBytes: 16_000 });
+  const w = new SendWindow({ windowBytes: 64_000, pingEveryBytes: 16_000, pingEveryMs: 0 });
   const pings = [];
   while (w.open()) { const p = w.wrote(30_000); if (p) pings.push(p); }
   assert.equal(w.sentBytes, 90_000);
@@ -73,6 +73,23 @@ test('send window: closes after windowBytes unconfirmed, a ping always follows t
   w.pong(pings[2]);
   assert.equal(w.unacked, 0);
   assert.equal(w.pings.size, 0);
+});
+
+test('send window: on a fast link a ping per window, not per frame; a pong that confirms old bytes is no fast-link sample', () => {
+  let t = 0;
+  const w = new SendWindow({ windowBytes: 64_000, pingEveryBytes: 16_000, pingEveryMs: 100 }, () => t);
+  const pings = [];
+  for (let i = 0; i < 30; i++) {   // 30 Hz x 30 KB, each pong back 1 ms after its ping
+    t = i * 33;
+    const p = w.wrote(30_000);
+    if (p) { pings.push(p); t += 1; w.pong(p); }
+  }
+  assert.ok(pings.length <= 15 && pings.length >= 8, `${pings.length} pings for 30 frames`);
+  assert.equal(w.unacked <= 64_000, true);
+  // frames written over 66 ms confirmed by a pong 1 ms after its ping: read over those 66 ms, not 1 ms
+  const later = w.rates.slice(1).map((r) => r.rate);
+  assert.ok(later.length > 0 && Math.max(...later) < 2 * 30_000 / 33, `rate samples ${later} bytes/ms`);
+  assert.equal(w.windowBytes, 64_000);
 });
 
 // --- the relay with a stand-in rosbridge ---

@@ -89,9 +89,106 @@ export function wantedWidth(cssWidth, dpr) {
 
 /**
  * The /cell/video/request arguments for a raw stream.
- * @param {string} topic @param {number} width @returns {{ topic: string, width: number, quality: number }}
+ * @param {string} topic @param {number} width @param {number} [quality]
+ * @returns {{ topic: string, width: number, quality: number }}
  */
-export const videoRequest = (topic, width) => ({ topic, width: Math.round(width), quality: RAW_QUALITY });
+export const videoRequest = (topic, width, quality = RAW_QUALITY) => ({ topic, width: Math.round(width), quality });
+
+/** What a raw stream's viewer asks for at each link level: 0 is what the screen can show, each further level
+ * sends fewer bytes a frame (a lower quality first: it costs less to see than a smaller picture). */
+export const LINK_LEVELS = Object.freeze([
+  { quality: RAW_QUALITY, scale: 1 },
+  { quality: 50, scale: 1 },
+  { quality: 30, scale: 1 },
+  { quality: 30, scale: 0.5 },
+  { quality: 30, scale: 0.25 },
+]);
+
+/**
+ * Follows the link of one raw-stream viewer: when frames come at well under the rate they are sent (the relay's
+ * latest-wins lane drops what the link cannot carry), the viewer asks for smaller frames; when they come at the
+ * full rate for a while, it tries one level better again, waiting twice as long after each try that failed.
+ */
+export class LinkAdapter {
+  static LOW = 0.7;          // below this share of the expected rate the link is short
+  static GOOD = 0.9;         // at or above it the link keeps up
+  static DOWN_MS = 4000;     // short this long: one level down
+  static UP_MS = 15_000;     // keeping up this long: one level up (doubled after each failed try, up to MAX_UP_MS)
+  static MAX_UP_MS = 120_000;
+  static SETTLE_MS = 3000;   // after a change, the rate is not judged until the new frames have come this long
+  static FAILED_TRY_MS = 10_000;   // down again this soon after going up: the try failed
+
+  constructor() {
+    this.level = 0;
+    this.upMs = LinkAdapter.UP_MS;
+    /** @type {number | null} */ this.lowSince = null;
+    /** @type {number | null} */ this.goodSince = null;
+    this.settleUntil = 0;
+    this.upAt = -Infinity;
+  }
+
+  /** What to ask at this level for a frame `width` device px wide. @param {number} width */
+  ask(width) {
+    const l = LINK_LEVELS[this.level];
+    return { width: l.scale === 1 ? width : Math.max(WIDTH_STEP, Math.ceil((width * l.scale) / WIDTH_STEP) * WIDTH_STEP), quality: l.quality };
+  }
+
+  /** Back to the best level (another stream, or the page shown again). @param {number} now */
+  reset(now) {
+    this.level = 0;
+    this.upMs = LinkAdapter.UP_MS;
+    this.lowSince = this.goodSince = null;
+    this.settleUntil = now + LinkAdapter.SETTLE_MS;
+  }
+
+  /**
+   * Judge the rate frames arrive at. @param {number} now ms @param {number} got frames/s arriving
+   * @param {number} expected frames/s sent (the camera's rate, within the subscription's rate cap); 0: not known
+   * @returns {boolean} whether the level changed (ask again)
+   */
+  update(now, got, expected) {
+    if (!(expected > 0) || now < this.settleUntil) {
+      this.lowSince = this.goodSince = null;
+      return false;
+    }
+    if (got < LinkAdapter.LOW * expected) {
+      this.goodSince = null;
+      this.lowSince ??= now;
+      if (now - this.lowSince < LinkAdapter.DOWN_MS || this.level >= LINK_LEVELS.length - 1) return false;
+      if (now - this.upAt < LinkAdapter.FAILED_TRY_MS) this.upMs = Math.min(LinkAdapter.MAX_UP_MS, this.upMs * 2);
+      return this.#go(this.level + 1, now);
+    }
+    this.lowSince = null;
+    if (got < LinkAdapter.GOOD * expected) {
+      this.goodSince = null;
+      return false;
+    }
+    this.goodSince ??= now;
+    if (now - this.goodSince < this.upMs || this.level === 0) return false;
+    this.upAt = now;
+    return this.#go(this.level - 1, now);
+  }
+
+  /** @param {number} level @param {number} now */
+  #go(level, now) {
+    this.level = level;
+    this.lowSince = this.goodSince = null;
+    this.settleUntil = now + LinkAdapter.SETTLE_MS;
+    return true;
+  }
+}
+
+/**
+ * The camera's own frame rate per /cell/video/status (its "fps" value for the stream `topic`), 0 when not known.
+ * @param {any} msg @param {string | null | undefined} topic
+ */
+export function sourceFps(msg, topic) {
+  if (!topic || !Array.isArray(msg?.status)) return 0;
+  const st = msg.status.find((/** @type {any} */ s) => s?.hardware_id === topic);
+  const v = Array.isArray(st?.values) ? st.values.find((/** @type {any} */ kv) => kv?.key === 'fps') : null;
+  const fps = Number(v?.value);
+  return Number.isFinite(fps) && fps > 0 ? fps : 0;
+}
 
 /**
  * What a /cell/video/request answer gives: the CompressedImage topic to subscribe and its frames' size, or why not.

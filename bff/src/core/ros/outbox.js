@@ -29,8 +29,10 @@ export const DEFAULTS = Object.freeze({
   windowBytes: 48 * 1024,
   /** the most the send window grows to */
   maxWindowBytes: 4 * 1024 * 1024,
-  /** a ping follows at least every this many written bytes (and always when the window fills) */
+  /** a ping follows a write once this many bytes and pingEveryMs have passed since the last one, and always when
+   * the window fills: on a fast link a ping per window, not per frame (each costs a write, a pong and a read) */
   pingEveryBytes: 12 * 1024,
+  pingEveryMs: 100,
 });
 
 /**
@@ -199,7 +201,7 @@ export class ClientOutbox {
  */
 export class SendWindow {
   /**
-   * @param {Partial<Pick<typeof DEFAULTS, 'windowBytes'|'pingEveryBytes'|'maxWindowBytes'>>} [o]
+   * @param {Partial<Pick<typeof DEFAULTS, 'windowBytes'|'pingEveryBytes'|'pingEveryMs'|'maxWindowBytes'>>} [o]
    * @param {() => number} [now] ms
    */
   constructor(o = {}, now = () => performance.now()) {
@@ -207,12 +209,15 @@ export class SendWindow {
     this.maxWindowBytes = Math.max(this.minWindowBytes, o.maxWindowBytes ?? DEFAULTS.maxWindowBytes);
     this.windowBytes = this.minWindowBytes;
     this.pingEveryBytes = o.pingEveryBytes ?? DEFAULTS.pingEveryBytes;
+    this.pingEveryMs = o.pingEveryMs ?? DEFAULTS.pingEveryMs;
+    this.pingedAtMs = -Infinity;
+    this.ackedAtMs = now();
     this.now = now;
     this.sentBytes = 0;
     this.ackedBytes = 0;
     this.pingedAt = 0;
     this.pingSeq = 0;
-    /** @type {Map<string, {bytes: number, at: number, acked: number}>} ping payload -> sentBytes, time and ackedBytes when it was written */
+    /** @type {Map<string, {bytes: number, at: number, acked: number, ackedAt: number}>} ping payload -> sentBytes, time, ackedBytes and its time when it was written */
     this.pings = new Map();
     /** @type {{at: number, rate: number}[]} delivery rate samples (bytes/ms) of the last RATE_SPAN_MS */
     this.rates = [];
@@ -232,10 +237,12 @@ export class SendWindow {
    */
   wrote(bytes) {
     this.sentBytes += bytes;
-    if (this.sentBytes - this.pingedAt < this.pingEveryBytes && this.open()) return null;
+    const t = this.now();
+    if (this.open() && (this.sentBytes - this.pingedAt < this.pingEveryBytes || t - this.pingedAtMs < this.pingEveryMs)) return null;
     this.pingedAt = this.sentBytes;
+    this.pingedAtMs = t;
     const payload = `bp${++this.pingSeq}`;
-    this.pings.set(payload, { bytes: this.sentBytes, at: this.now(), acked: this.ackedBytes });
+    this.pings.set(payload, { bytes: this.sentBytes, at: t, acked: this.ackedBytes, ackedAt: this.ackedAtMs });
     // Only a bounded number of pings is ever outstanding: each one needs pingEveryBytes or a full window.
     return payload;
   }
@@ -246,7 +253,7 @@ export class SendWindow {
    */
   probe() {
     const payload = `bp${++this.pingSeq}`;
-    this.pings.set(payload, { bytes: this.sentBytes, at: this.now(), acked: this.ackedBytes });
+    this.pings.set(payload, { bytes: this.sentBytes, at: this.now(), acked: this.ackedBytes, ackedAt: this.ackedAtMs });
     return payload;
   }
 
@@ -257,9 +264,12 @@ export class SendWindow {
     for (const [k, v] of this.pings) { if (v.bytes > ping.bytes) break; this.pings.delete(k); }
     const t = this.now();
     const rtt = Math.max(0.1, t - ping.at);
-    // What was unconfirmed when the ping went out has been read by its pong: the link's rate over that round trip.
-    const rate = (ping.bytes - ping.acked) / rtt;
+    // What was unconfirmed when the ping went out has been read since the confirmation before it (as BBR samples
+    // its delivery rate). Pings are sparse on a fast link: bytes written long before this ping were not all read
+    // within its round trip.
+    const rate = (ping.bytes - ping.acked) / Math.max(rtt, t - ping.ackedAt);
     if (ping.bytes > this.ackedBytes) this.ackedBytes = ping.bytes;
+    this.ackedAtMs = t;
     this.minRttMs = Math.min(this.minRttMs, rtt);
     this.rates.push({ at: t, rate });
     while (this.rates.length > RATE_SAMPLES || this.rates[0].at < t - RATE_SPAN_MS) this.rates.shift();

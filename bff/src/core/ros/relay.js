@@ -91,14 +91,19 @@ export class RosRelay {
     };
 
     // Write while the browser has confirmed reading all but windowBytes (pong) and ws holds little unsent.
+    // Frames and pings written in one go leave in one write (ws's socket is corked around them).
+    const socket = /** @type {import('node:net').Socket} */ (/** @type {any} */ (ws)._socket);
     const pump = () => {
-      while (ws.readyState === WebSocket.OPEN && window.open() && ws.bufferedAmount < window.windowBytes) {
-        const f = outbox.shift();
-        if (!f) return;
-        ws.send(f.data, { binary: f.binary }, afterWrite);
-        const ping = window.wrote(f.data.length);
-        if (ping) ws.ping(ping);
-      }
+      socket.cork();
+      try {
+        while (ws.readyState === WebSocket.OPEN && window.open() && ws.bufferedAmount < window.windowBytes) {
+          const f = outbox.shift();
+          if (!f) return;
+          ws.send(f.data, { binary: f.binary }, afterWrite);
+          const ping = window.wrote(f.data.length);
+          if (ping) ws.ping(ping);
+        }
+      } finally { socket.uncork(); }
     };
     const afterWrite = () => { if (outbox.length) pump(); };
     ws.on('pong', (d) => { if (window.pong(d.toString('latin1')) && outbox.length) pump(); });
