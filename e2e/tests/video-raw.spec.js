@@ -65,3 +65,31 @@ test('a raw 720p camera reaches the viewer as JPEG at its element size; full scr
   await page.goto('/');
   await expect.poll(() => subscribers(RAW), { timeout: 15_000 }).toEqual([]);
 });
+
+test('on a link too slow for the camera\'s frames the viewer asks smaller ones (lower quality first) and keeps showing live frames', async ({ page, context }) => {
+  test.slow();
+  await loginAs(page, 'operator');
+  await page.goto('/video');
+  await page.getByRole('radio', { name: NAME }).check();
+  const camera = page.getByTestId('video');
+  await expect(page.getByTestId('video-badge')).toHaveText('Live', { timeout: 30_000 });
+  await expect(camera).toHaveAttribute('data-link-level', '0');
+  await expect(camera).toHaveAttribute('data-request-quality', '70');
+  await expect(page.getByTestId('video-link')).toHaveCount(0);
+  const width = Number(await camera.getAttribute('data-request-width'));
+
+  // Chromium's network emulation: 40 KB/s down, far less than the camera's frames at this size.
+  const cdp = await context.newCDPSession(page);
+  await cdp.send('Network.enable');
+  await cdp.send('Network.emulateNetworkConditions', { offline: false, latency: 20, downloadThroughput: 40_000, uploadThroughput: 200_000 });
+  await expect(camera).toHaveAttribute('data-request-quality', '50', { timeout: 20_000 });
+  await expect(camera).toHaveAttribute('data-request-width', String(width));
+  await expect(camera).toHaveAttribute('data-source-topic', /_q50$/, { timeout: 10_000 });
+  await expect(page.getByTestId('video-link')).toHaveText('Smaller frames for a slow link');
+  // Still short: next the quality floor, then half the width.
+  await expect(camera).toHaveAttribute('data-request-quality', '30', { timeout: 20_000 });
+  await expect.poll(async () => Number(await camera.getAttribute('data-request-width')), { timeout: 20_000 }).toBeLessThan(width);
+  await expect(camera).toHaveAttribute('data-source-topic', /\/w\d+_q30$/, { timeout: 10_000 });
+  await expect(page.getByTestId('video-badge')).toHaveText('Live', { timeout: 15_000 });
+  await cdp.send('Network.emulateNetworkConditions', { offline: false, latency: 0, downloadThroughput: -1, uploadThroughput: -1 });
+});
