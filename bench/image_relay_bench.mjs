@@ -12,7 +12,7 @@ import fs from 'node:fs';
 import { WebSocket } from 'ws';
 import { decode as cborDecode } from 'cbor-x';
 import { stackEnv, addUser, startStack, stopStack, pidsOfStack, REPO_ROOT } from '../e2e/lib/stack.js';
-import { procName } from './soak_cell.mjs';
+import { procName, pct, cpuTicks, loginCookie } from './soak_cell.mjs';
 
 const QUICK = process.env.BENCH_QUICK === '1';
 const SECONDS = Number(process.env.BENCH_DURATION_S || (QUICK ? 5 : 15));
@@ -27,8 +27,6 @@ const env = stackEnv({ port, masterPort: port + 1, rosbridgePort: port + 2, urHo
 addUser(env, 'bench', 'operator', 'bench-password');
 const base = `http://127.0.0.1:${port}`;
 const sleep = (/** @type {number} */ ms) => new Promise((r) => setTimeout(r, ms));
-const pct = (/** @type {number[]} */ xs, /** @type {number} */ p) => { const s = [...xs].sort((a, b) => a - b); return s.length ? s[Math.min(s.length - 1, Math.floor((p / 100) * s.length))] : NaN; };
-const cpuTicks = (/** @type {number} */ pid) => { try { const s = fs.readFileSync(`/proc/${pid}/stat`, 'utf8'); const f = s.slice(s.lastIndexOf(') ') + 2).split(' '); return Number(f[11]) + Number(f[12]); } catch { return NaN; } };
 
 const DRIVER = `
 import io, time
@@ -53,12 +51,6 @@ while not rospy.is_shutdown():
     pub.publish(m)
     rate.sleep()
 `;
-
-async function login() {
-  const r = await fetch(`${base}/api/auth/login`, { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ username: 'bench', password: 'bench-password' }) });
-  if (!r.ok) throw new Error(`login: HTTP ${r.status}`);
-  return String(r.headers.get('set-cookie')).split(';')[0];
-}
 
 /** @param {string} url @param {Record<string, string>} headers */
 async function viewer(url, headers) {
@@ -137,7 +129,7 @@ try {
   const names = new Map(pidsOfStack(env.DATA_DIR).map((p) => [procName(p), p]));
   const rb = /** @type {number} */ (names.get('rosbridge_websocket'));
   const bff = /** @type {number} */ (names.get('bff'));
-  const cookie = await login();
+  const cookie = await loginCookie(base, 'bench', 'bench-password');
   console.log(`A ${bytes} B JPEG CompressedImage (640x480) at 30 Hz to ${VIEWERS} viewers, CBOR, queue_length 1; ${ROUNDS} round(s) of ${SECONDS} s per case`);
   const round = async () => {
     if (ref) await measure('ref', `ws://127.0.0.1:${refPort}`, {}, [/** @type {number} */ (ref.pid)]);

@@ -22,6 +22,16 @@ import { pidsOfStack } from '../e2e/lib/stack.js';
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 const now = () => performance.now();
+/** The p-th percentile (nearest rank) of xs, NaN when empty. @param {number[]} xs @param {number} p */
+export const pct = (xs, p) => { const s = [...xs].sort((a, b) => a - b); return s.length ? s[Math.min(s.length - 1, Math.floor((p / 100) * s.length))] : NaN; };
+
+/** Log in to the BFF at base; the session cookie ("name=value"). @param {string} base @param {string} username @param {string} password */
+export async function loginCookie(base, username, password) {
+  const r = await fetch(`${base}/api/auth/login`, { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ username, password }) });
+  if (!r.ok) throw new Error(`login: HTTP ${r.status} ${await r.text()}`);
+  return String(r.headers.get('set-cookie')).split(';')[0];
+}
+
 export const median = (xs) => { const s = [...xs].sort((a, b) => a - b); return s.length ? (s.length % 2 ? s[(s.length - 1) / 2] : (s[s.length / 2 - 1] + s[s.length / 2]) / 2) : NaN; };
 
 /** A login of its own (its own session cookie), renewed from every answer's Set-Cookie. */
@@ -651,7 +661,8 @@ const memKb = (pid) => {
     return [Number(/VmRSS:\s+(\d+)/.exec(st)[1]), Number(/RssAnon:\s+(\d+)/.exec(st)[1])];
   } catch { return [NaN, NaN]; }
 };
-const cpuTicks = (pid) => { try { const s = fs.readFileSync(`/proc/${pid}/stat`, 'utf8'); const f = s.slice(s.lastIndexOf(') ') + 2).split(' '); return Number(f[11]) + Number(f[12]); } catch { return NaN; } };
+/** CPU time of a process so far, in clock ticks (1/100 s), NaN once it is gone. @param {number} pid */
+export const cpuTicks = (pid) => { try { const s = fs.readFileSync(`/proc/${pid}/stat`, 'utf8'); const f = s.slice(s.lastIndexOf(') ') + 2).split(' '); return Number(f[11]) + Number(f[12]); } catch { return NaN; } };
 
 /** Every process of one stack (pidsOfStack), grouped by name: RSS samples per minute, CPU, restarts. */
 /**

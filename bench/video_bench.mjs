@@ -13,7 +13,7 @@ import fs from 'node:fs';
 import { WebSocket } from 'ws';
 import { decode as cborDecode } from 'cbor-x';
 import { stackEnv, addUser, startStack, stopStack, pidsOfStack, REPO_ROOT } from '../e2e/lib/stack.js';
-import { procName } from './soak_cell.mjs';
+import { procName, pct, cpuTicks, loginCookie } from './soak_cell.mjs';
 
 const QUICK = process.env.BENCH_QUICK === '1';
 const SECONDS = Number(process.env.BENCH_DURATION_S || (QUICK ? 5 : 20));
@@ -26,8 +26,6 @@ const env = stackEnv({ port, masterPort: port + 1, rosbridgePort: port + 2, urHo
 addUser(env, 'bench', 'operator', 'bench-password');
 const base = `http://127.0.0.1:${port}`;
 const sleep = (/** @type {number} */ ms) => new Promise((r) => setTimeout(r, ms));
-const pct = (/** @type {number[]} */ xs, /** @type {number} */ p) => { const s = [...xs].sort((a, b) => a - b); return s.length ? s[Math.min(s.length - 1, Math.floor((p / 100) * s.length))] : NaN; };
-const cpuTicks = (/** @type {number} */ pid) => { try { const s = fs.readFileSync(`/proc/${pid}/stat`, 'utf8'); const f = s.slice(s.lastIndexOf(') ') + 2).split(' '); return Number(f[11]) + Number(f[12]); } catch { return NaN; } };
 
 const DRIVER = `
 import io, sys, time
@@ -60,12 +58,6 @@ while not rospy.is_shutdown():
     n += 1
     rate.sleep()
 `;
-
-async function login() {
-  const r = await fetch(`${base}/api/auth/login`, { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ username: 'bench', password: 'bench-password' }) });
-  if (!r.ok) throw new Error(`login: HTTP ${r.status}`);
-  return String(r.headers.get('set-cookie')).split(';')[0];
-}
 
 /** A JPEG's width x height from its SOF marker. @param {Uint8Array} b */
 function jpegSize(b) {
@@ -140,7 +132,7 @@ try {
   driver = spawn('python', ['-c', DRIVER], { cwd: REPO_ROOT, env, stdio: ['ignore', 'pipe', 'inherit'] });
   await new Promise((res, rej) => { driver.stdout.once('data', res); driver.once('exit', (c) => rej(new Error(`camera driver exited ${c}`))); });
   console.log(`Raw 1280x720 rgb8 at 30 Hz to ${VIEWERS} phone viewers (${WIDTH} device px) through the BFF on loopback, ${SECONDS} s per case`);
-  const cookie = await login();
+  const cookie = await loginCookie(base, 'bench', 'bench-password');
   await measure('raw stream through the video node, JPEG sized to the phone', true, cookie);
   await measure('reference: the publisher\'s full-size JPEG (quality 80) to each viewer', false, cookie);
 } finally {

@@ -18,25 +18,9 @@ setup() {
   # shellcheck disable=SC1091
   source "$ROOT/scripts/ros-env.sh"
   pip install -q --target "$RBS_DIR/pylib" 'autobahn<24' twisted pymongo tornado
-  # its messages, and rosauth's one service (imported even with authentication off)
-  mkdir -p "$RBS_DIR/ws/src/rosauth/srv"
-  cp -r "$RBS_DIR/rosbridge_msgs" "$RBS_DIR/ws/src/"
-  printf '%s\n' string\ mac string\ client string\ dest string\ rand time\ t string\ level time\ end --- bool\ authenticated \
-    > "$RBS_DIR/ws/src/rosauth/srv/Authentication.srv"
-  cat > "$RBS_DIR/ws/src/rosauth/package.xml" <<'XML'
-<?xml version="1.0"?>
-<package format="2"><name>rosauth</name><version>1.0.0</version><description>rosauth's service only</description>
-<maintainer email="dev@example.com">bench</maintainer><license>BSD</license><buildtool_depend>catkin</buildtool_depend>
-<build_depend>message_generation</build_depend><exec_depend>message_runtime</exec_depend></package>
-XML
-  cat > "$RBS_DIR/ws/src/rosauth/CMakeLists.txt" <<'CM'
-cmake_minimum_required(VERSION 3.0.2)
-project(rosauth)
-find_package(catkin REQUIRED COMPONENTS message_generation)
-add_service_files(FILES Authentication.srv)
-generate_messages()
-catkin_package(CATKIN_DEPENDS message_runtime)
-CM
+  # its messages, and rosauth's one service (imported even with authentication off): bench/reference/rosauth
+  mkdir -p "$RBS_DIR/ws/src"
+  cp -r "$RBS_DIR/rosbridge_msgs" "$ROOT/bench/reference/rosauth" "$RBS_DIR/ws/src/"
   (cd "$RBS_DIR/ws" && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=OFF >"$RBS_DIR/catkin.log" 2>&1) \
     || { tail -20 "$RBS_DIR/catkin.log" >&2; exit 1; }
   touch "$RBS_DIR/ready"

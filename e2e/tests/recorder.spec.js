@@ -6,27 +6,9 @@ import fs from 'node:fs';
 import { test, expect } from '@playwright/test';
 import { loginAs, goToPage } from '../lib/app.js';
 import { rosCli } from '../lib/ros.js';
+import { MCAP_MAGIC, listed, newRecording } from '../lib/recorder.js';
 
 const fault = (/** @type {string} */ f) => rosCli(`rosservice call /sim/trigger_fault "fault: '${f}'"`);
-const MCAP_MAGIC = Buffer.from([0x89, 0x4d, 0x43, 0x41, 0x50, 0x30, 0x0d, 0x0a]);
-
-/** The names listed, once the list has loaded. @param {import('@playwright/test').Page} page */
-async function listed(page) {
-  await expect(page.getByRole('list', { name: 'Recordings' }).or(page.getByTestId('recordings-empty'))).toBeVisible();
-  return page.getByTestId('recording').evaluateAll((els) => els.map((e) => e.getAttribute('data-name')));
-}
-
-/** The one recording listed that was not before. @param {import('@playwright/test').Page} page @param {(string|null)[]} before */
-async function newRecording(page, before) {
-  let name = '';
-  await expect.poll(async () => {
-    const fresh = (await page.getByTestId('recording').evaluateAll((els) => els.map((e) => e.getAttribute('data-name'))))
-      .filter((n) => !before.includes(n));
-    name = fresh[0] ?? '';
-    return fresh.length;
-  }, { timeout: 40_000, message: 'a new recording in the list' }).toBe(1);
-  return page.locator(`[data-testid="recording"][data-name="${name}"]`);
-}
 
 // The cell as the next spec expects it: the fault gone and its alarm reset (once inactive, Reset clears it).
 test.afterEach(async () => {
@@ -56,7 +38,8 @@ test('a fault is recorded: listed, its timeline shows the alarm, downloads as MC
   await expect(timeline).toHaveAttribute('data-name', name);
   await expect(timeline.getByTestId('timeline-marker')).toHaveText('Alarm');
   const alarmEvents = page.getByRole('list', { name: `Events of ${name}` }).locator('[data-testid="timeline-event"][data-lane="alarms"]');
-  await expect(alarmEvents.filter({ hasText: 'device.gripper_fault' })).toHaveCount(1);
+  // (at least one: the spec run again within the recorder's 120 s finds the last run's fault in the window too)
+  await expect(alarmEvents.filter({ hasText: 'device.gripper_fault' })).not.toHaveCount(0);
   await expect(page.getByRole('list', { name: `Events of ${name}` }).locator('[data-lane="mode"]').filter({ hasText: 'alarm' })).not.toHaveCount(0);
 
   // The download is the MCAP file, with why it was made in its metadata.
