@@ -50,12 +50,17 @@ test('Stop robot from another session while the holder still holds a jog button:
     await loginAs(op, 'operator');
     await holdJog(page, robot, 'Jog joint 1 -');
     await op.getByRole('button', { name: 'Stop robot' }).click();
-    await expect.poll(() => robot.speed(), { timeout: 3_000, intervals: [20] }).toBeLessThan(1e-3);
-    // The holder's thumb is still down and its page goes on sending that press: the arm does not start again (a
-    // restart would jog at ~0.25 rad/s; the stopped arm only settles, well under 1 mrad/s).
+    // The driver answers the stop once the arm stands still. Wait for that answer, not for the arm to read still:
+    // on a loaded host the holder's heartbeats may stall first, so the driver's heartbeat timeout stops the jog, the
+    // heartbeats resume the same press, and only then does the stop arrive (both seen in CI). What is tested is
+    // what happens after the stop has reached the driver.
+    await expect(op.getByTestId('stop-robot-feedback')).toContainText('Stop sent', { timeout: 5_000 });
+    await expectStandstill(robot);
+    // The holder's thumb is still down and its page goes on sending that press: the arm does not start again. A
+    // restart would jog at ~0.25 rad/s. The stopped arm only settles (STILL in lib/manual.js).
     const held = await robot.observe(125);
-    expect(held.maxSpeed, `the largest joint speed over 1 s of joint states with the button still held (travel ${held.travel} rad)`).toBeLessThan(0.01);
-    expect(held.travel).toBeLessThan(0.005);
+    expect(held.maxSpeed, `the largest joint speed over 1 s of joint states with the button still held (travel ${held.travel} rad)`).toBeLessThan(STILL.speed);
+    expect(held.travel).toBeLessThan(STILL.rad);
     await page.mouse.up();
     const q0 = robot.joints()[0];
     await holdJog(page, robot, 'Jog joint 1 -'); // a new press moves it
