@@ -26,7 +26,7 @@ import { readEnv, REPO_ROOT } from '../bff/src/core/config/env.js';
 import { loadCell, CellConfigError } from '../bff/src/core/config/cell.js';
 import { FEATURES } from '../bff/src/features/index.js';
 import { launchFiles } from './feature-launch.js';
-import { masterOnline } from '../bff/src/core/ros/health.js';
+import { masterOnline, tcpReachable } from '../bff/src/core/ros/health.js';
 import { resolveHosts, armsOf } from '../bff/src/core/config/hosts.js';
 import { RestartPolicy, restartDelay, seconds } from './supervise/restart-policy.js';
 import { Liveness, graceFromEnv } from './supervise/liveness.js';
@@ -441,6 +441,13 @@ async function main() {
   }
   const launches = launchFiles(cell, path.join(REPO_ROOT, 'ros_backend/src/cell_bringup')).map(shellQuote).join(' ');
   startRos('ros', `roslaunch --wait ${launches} cell_config:=${shellQuote(env.cellConfig)} rosbridge_port:=${env.rosbridgePort}`);
+  await startLocalBroker(cell);
+  const lan = Object.values(os.networkInterfaces()).flat().find((i) => i && i.family === 'IPv4' && !i.internal);
+  // The address the plant page links this cell with (its birth's Properties/URL), unless the cell file or the
+  // environment names one.
+  if (cell.plant && !cell.plant.url && !childEnv.PLANT_CELL_URL) {
+    childEnv.PLANT_CELL_URL = lan ? `https://${lan.address}:${env.tlsPort}/` : `http://localhost:${env.port}/`;
+  }
   const bff = start('bff', process.execPath, [path.join(REPO_ROOT, 'bff/src/server.js')]);
   if (livenessGraceMs) watchLiveness(bff, async (ms) => !!(await bffHealth(ms)), livenessGraceMs);
   // Long enough for a few restarts of a child that dies while starting (a crash loop ends the stack first).
@@ -451,9 +458,28 @@ async function main() {
     if (stopping) throw e;
     log('warning: rosbridge does not answer yet; the app will connect when it does');
   }
-  const lan = Object.values(os.networkInterfaces()).flat().find((i) => i && i.family === 'IPv4' && !i.internal);
   log(`ready: http://localhost:${env.port}/`);
   if (lan) log(`phones and tablets: https://${lan.address}:${env.tlsPort}/ (trust the cell's certificate first: http://${lan.address}:${env.port}/trust)`);
+}
+
+/**
+ * The plant's MQTT broker for a demo or a test: when the cell file's (or PLANT_BROKER_URL's) broker is mqtt:// on
+ * this machine and nothing answers there, run Debian's mosquitto on that port (anonymous, loopback only). A plant
+ * runs its own broker; then this does nothing.
+ * @param {any} cell
+ */
+async function startLocalBroker(cell) {
+  if (!cell.plant) return;
+  let url;
+  try { url = new URL(process.env.PLANT_BROKER_URL || cell.plant.broker); } catch { return; }
+  if (url.protocol !== 'mqtt:' || !['127.0.0.1', 'localhost'].includes(url.hostname)) return;
+  const port = Number(url.port || 1883);
+  if (await tcpReachable('127.0.0.1', port)) return;
+  const conf = path.join(env.dataDir, 'mosquitto.conf');
+  fs.writeFileSync(conf, `listener ${port} 127.0.0.1\nallow_anonymous true\npersistence false\n`);
+  log(`starting a local MQTT broker for the plant view (mosquitto on port ${port})`);
+  start('broker', '/usr/sbin/mosquitto', ['-c', conf]);
+  await waitFor(() => tcpReachable('127.0.0.1', port), 10_000, 'mosquitto');
 }
 
 /** The BFF's health answer, or null when it does not answer within `timeoutMs`. @returns {Promise<any>} */

@@ -63,7 +63,14 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
   lease.resume(leaseFile.read(), startedAt);
   const rosHealth = new RosHealth({ masterUri: env.rosMasterUri, rosbridgePort: env.rosbridgePort });
   const started = Date.now();
-  const healthReport = async () => ({ status: 'ok', version: VERSION, uptime_s: (Date.now() - started) / 1000, ros: await rosHealth.get() });
+  /** @type {Record<string, () => object>} what features add to the health report (e.g. the plant broker link) */
+  const healthParts = {};
+  /** @type {(() => void)[]} the features' background services, stopped on close */
+  const closers = [];
+  const healthReport = async () => ({
+    status: 'ok', version: VERSION, uptime_s: (Date.now() - started) / 1000, ros: await rosHealth.get(),
+    ...Object.fromEntries(Object.entries(healthParts).map(([k, fn]) => [k, fn()])),
+  });
   const authenticate = (req) => sessionOf(req, tokens, users);
   const grants = new Map(Object.keys(cell.roles).map((role) => [role, grantsFor(cell, features, role)]));
   const openapi = buildOpenApi(features);
@@ -128,6 +135,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     if (!f.routes) continue;
     app.use(f.routes({
       cell, section: cell[f.id], cellFile: env.cellConfig, env, users, audit, healthReport, log,
+      onClose: (fn) => { closers.push(fn); }, addHealth: (key, fn) => { healthParts[key] = fn; },
       guard: [requireSession, requirePage(cell, f.id), validateRequests(openapi, { include: (p) => featurePaths.has(p), audit })],
     }));
   }
@@ -142,7 +150,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     res.status(e.status).json({ error: e.message });
   });
 
-  return { app, relay, cell, features, grants, openapi, users, tokens, audit, lease, initial, close: () => { relay.close(); awake.stop(); } };
+  return { app, relay, cell, features, grants, openapi, users, tokens, audit, lease, initial, close: () => { relay.close(); awake.stop(); for (const c of closers) c(); } };
 }
 
 /** Origin (when the browser sends one) must name the host the request was sent to. @param {import('node:http').IncomingMessage} req */

@@ -18,7 +18,9 @@ export async function startBff(extraEnv = {}, opts = {}) {
   fs.writeFileSync(path.join(appDir, 'index.html'), '<!doctype html><title>shell</title>');
   fs.writeFileSync(path.join(appDir, '_app/immutable/entry.abc123.js'), 'export {}');
   fs.writeFileSync(path.join(appDir, 'sw.js'), '// sw');
-  const env = readEnv({ DATA_DIR: dataDir, APP_DIR: appDir, ROSBRIDGE_PORT: '1', ROS_MASTER_URI: 'http://127.0.0.1:1', ...extraEnv });
+  const env = readEnv({ DATA_DIR: dataDir, APP_DIR: appDir, ROSBRIDGE_PORT: '1', ROS_MASTER_URI: 'http://127.0.0.1:1',
+    // Not the demo's broker (a developer's `npm start` may run one): these BFFs must not report as its cells.
+    PLANT_BROKER_URL: 'mqtt://127.0.0.1:1', ...extraEnv });
   const bff = await createBff(env, { log: () => {}, ...opts });
   const server = http.createServer(bff.app);
   server.on('upgrade', (req, socket, head) => bff.relay.handleUpgrade(req, socket, head));

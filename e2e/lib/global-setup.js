@@ -31,6 +31,7 @@ export default async function globalSetup() {
   process.env.E2E_ROSBRIDGE_URL = `ws://127.0.0.1:${env.ROSBRIDGE_PORT}`;
   process.env.E2E_USERS = JSON.stringify(users);
   process.env.E2E_DATA_DIR = env.DATA_DIR;
+  process.env.E2E_PLANT_BROKER_URL = env.PLANT_BROKER_URL;
   process.env.E2E_CELL_CONFIG = cellConfig;
   globalThis.__cellStack = stack;
 }

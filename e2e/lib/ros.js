@@ -1,4 +1,5 @@
 // Talking to the stack's ROS side from tests, as an engineer would from a terminal.
+import { expect } from '@playwright/test';
 import { execFile, spawn } from 'node:child_process';
 import { promisify } from 'node:util';
 import { REPO_ROOT } from './stack.js';
@@ -33,6 +34,29 @@ export function rosCliRunning(command) {
 /** @param {string} mode */
 export function publishMode(mode) {
   return rosCli(`rostopic pub -1 /cell/mode cell_msgs/OperationMode "{mode: ${mode}, source: e2e}"`);
+}
+
+/** A device fault of the simulated cell (/sim/trigger_fault stands for a real device); 'reset' ends it. @param {string} f */
+export const simFault = (f) => rosCli(`rosservice call /sim/trigger_fault "fault: '${f}'"`);
+
+/** The cell as the next spec expects it: the gripper fault gone and its alarm reset (once inactive, Reset clears it). */
+export async function clearGripperFault() {
+  await simFault('reset');
+  await expect.poll(async () => {
+    await rosCli('rosservice call /cell/alarms/reset');
+    return (await rosCli('rostopic echo -n1 /cell/alarms/list')).stdout.includes('device.gripper_fault');
+  }, { timeout: 30_000, message: 'the gripper alarm reset' }).toBe(false);
+}
+
+/**
+ * No recording waiting for its seconds after an alarm (the flight recorder's /cell/recorder/state): a spec that raised
+ * an alarm leaves the recorder as the next one expects it (the Recordings spec counts the recordings that appear).
+ */
+export async function recorderIdle() {
+  await expect.poll(async () => {
+    const out = (await rosCli('rostopic echo -n1 /cell/recorder/state')).stdout;
+    return /^pending: ''$/m.test(out) || /^pending: ""$/m.test(out);
+  }, { timeout: 40_000, intervals: [1000], message: 'the flight recorder has written the recording of the alarm' }).toBe(true);
 }
 
 /** XML-RPC call with string arguments; returns the raw response body. */

@@ -20,6 +20,9 @@ export function stackEnv({ port, masterPort, rosbridgePort, urHost = '127.0.0.9'
     ROSBRIDGE_PORT: String(rosbridgePort),
     DATA_DIR: dataDir,
     UR_HOST: urHost,
+    // The plant's broker for this stack (the stack starts mosquitto there when its cell file has a plant section).
+    PLANT_BROKER_URL: `mqtt://127.0.0.1:${port + 6}`,
+    PLANT_CELL_URL: `http://127.0.0.1:${port}/`,
     ...extraEnv,
   };
 }

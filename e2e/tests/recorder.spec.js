@@ -5,19 +5,10 @@
 import fs from 'node:fs';
 import { test, expect } from '@playwright/test';
 import { loginAs, goToPage } from '../lib/app.js';
-import { rosCli } from '../lib/ros.js';
+import { simFault as fault, clearGripperFault } from '../lib/ros.js';
 import { MCAP_MAGIC, listed, newRecording } from '../lib/recorder.js';
 
-const fault = (/** @type {string} */ f) => rosCli(`rosservice call /sim/trigger_fault "fault: '${f}'"`);
-
-// The cell as the next spec expects it: the fault gone and its alarm reset (once inactive, Reset clears it).
-test.afterEach(async () => {
-  await fault('reset');
-  await expect.poll(async () => {
-    await rosCli('rosservice call /cell/alarms/reset');
-    return (await rosCli('rostopic echo -n1 /cell/alarms/list')).stdout.includes('device.gripper_fault');
-  }, { timeout: 30_000, message: 'the gripper alarm reset' }).toBe(false);
-});
+test.afterEach(clearGripperFault);
 
 test('a fault is recorded: listed, its timeline shows the alarm, downloads as MCAP, an admin deletes it', async ({ page }) => {
   test.slow();

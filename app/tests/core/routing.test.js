@@ -17,7 +17,7 @@ describe('routing from the feature list', () => {
       ['routines', '/routines'],
       ['alarms', '/alarms'],
       ['recorder', '/recorder'],
-      ['inspect', '/inspect'],
+      ['inspect', '/inspect'], ['plant', '/plant'],
       ['database', '/database'],
       ['system', '/system'],
     ]);

@@ -14,6 +14,7 @@ import database from './database/index.js';
 import system from './system/index.js';
 import recorder from './recorder/index.js';
 import inspect from './inspect/index.js';
+import plant from './plant/index.js';
 
 /** @type {import('../core/features/feature.js').Feature[]} */
-export const FEATURES = [home, modules, process, manual, scene, sensors, video, parameters, routines, alarms, database, system, recorder, inspect];
+export const FEATURES = [home, modules, process, manual, scene, sensors, video, parameters, routines, alarms, database, system, recorder, inspect, plant];

@@ -16,7 +16,7 @@ const demo = () => yaml.load(fs.readFileSync(DEMO, 'utf8'));
 test('the demo cell file is valid and has a section for every feature', () => {
   const cell = loadCell(DEMO, FEATURES);
   for (const f of FEATURES) if (f.schema) assert.ok(cell[f.id], `section ${f.id}`);
-  assert.equal(FEATURES.filter((f) => f.schema).length, 12);
+  assert.equal(FEATURES.filter((f) => f.schema).length, 13);
 });
 
 const broken = [
@@ -28,7 +28,7 @@ const broken = [
   ['initial mode not listed', (d) => { d.operation_mode.initial = 'dancing'; }, /operation_mode\.initial: "dancing"/],
   ['graph kind', (d) => { d.sensors[0].kind = 'pie'; }, /sensors\[0\]\.kind: must be one of time-series, scatter/],
   ['path escape in database dir', (d) => { d.database.directory = '../etc'; }, /database\.directory: must match pattern/],
-  ['page without a feature', (d) => { d.pages.push({ id: 'bogus', title: 'Bogus' }); }, /pages\[14\]: no feature "bogus"/],
+  ['page without a feature', (d) => { d.pages.push({ id: 'bogus', title: 'Bogus' }); }, /pages\[15\]: no feature "bogus"/],
   ['page without its section', (d) => { delete d.sensors; }, /pages\[5\]: page "sensors" needs the "sensors" section/],
   ['commands of a feature the role does not see', (d) => { d.roles.operator.commands.push('parameters'); }, /roles\.operator\.commands\[4\]: "parameters" is not one of the role's pages/],
   ['commands of a feature that has none', (d) => { d.roles.admin.commands.push('sensors'); }, /roles\.admin\.commands\[7\]: feature "sensors" has no commands/],

@@ -20,6 +20,7 @@ import alarmsIcon from './alarms/icon.js';
 import databaseIcon from './database/icon.js';
 import recorderIcon from './recorder/icon.js';
 import inspectIcon from './inspect/icon.js';
+import plantIcon from './plant/icon.js';
 import systemIcon from './system/icon.js';
 import { alarmSignal } from './alarms/signal.svelte.js';
 
@@ -61,6 +62,7 @@ export const features = [
   },
   { id: 'recorder', path: '/recorder', title: 'Recordings', icon: recorderIcon, load: () => import('./recorder/Page.svelte') },
   { id: 'inspect', path: '/inspect', title: 'Inspect', icon: inspectIcon, load: () => import('./inspect/Page.svelte') },
+  { id: 'plant', path: '/plant', title: 'Plant', icon: plantIcon, load: () => import('./plant/Page.svelte') },
   { id: 'database', path: '/database', title: 'Database', icon: databaseIcon, load: () => import('./database/Page.svelte') },
   { id: 'system', path: '/system', title: 'System', icon: systemIcon, load: () => import('./system/Page.svelte') },
 ];

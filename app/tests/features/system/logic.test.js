@@ -14,6 +14,15 @@ describe('system logic', () => {
     expect(healthRows(null, false)).toEqual([]);
   });
 
+  it('the plant broker link, when the cell reports to one', () => {
+    const link = (/** @type {string} */ state, error = '') => ({ state, since: 1, error });
+    const plant = { broker: 'mqtt://b:1883', group_id: 'g', edge_node_id: 'n', view: link('off') };
+    const h = { status: 'ok', ros: { rosbridge: true, master: true }, uptime_s: 5, version: '1' };
+    expect(healthRows({ ...h, plant: { ...plant, reporting: link('connected') } }, false)[3]).toEqual({ label: 'Plant broker mqtt://b:1883', ok: true, text: 'connected' });
+    expect(healthRows({ ...h, plant: { ...plant, reporting: link('down', 'connect ECONNREFUSED') } }, false)[3]).toEqual({ label: 'Plant broker mqtt://b:1883', ok: false, text: 'down: connect ECONNREFUSED' });
+    expect(healthRows({ ...h, plant: { ...plant, reporting: link('off') } }, false)).toHaveLength(3);
+  });
+
   it('uptime', () => {
     expect(uptimeText(65)).toBe('1 min 5 s');
     expect(uptimeText(3 * 3600 + 120)).toBe('3 h 2 min');

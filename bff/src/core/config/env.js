@@ -19,6 +19,8 @@ export const REPO_ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url
  * @property {string} usbRoots colon-separated USB mount roots (overrides the cell file)
  * @property {string} tlsCert user-provided certificate (PEM file), replaces the local CA's
  * @property {string} tlsKey its key
+ * @property {{brokerUrl: string, cellUrl: string, username: string, password: string}} plant the plant broker's
+ *   address and credentials (override the cell file's plant section; credentials never live in the cell file)
  */
 
 /** @param {NodeJS.ProcessEnv} [e] @returns {Env} */
@@ -38,6 +40,10 @@ export function readEnv(e = process.env) {
     usbRoots: e.USB_ROOTS || '',
     tlsCert: e.TLS_CERT || '',
     tlsKey: e.TLS_KEY || '',
+    plant: {
+      brokerUrl: e.PLANT_BROKER_URL || '', cellUrl: e.PLANT_CELL_URL || '',
+      username: e.PLANT_MQTT_USERNAME || '', password: e.PLANT_MQTT_PASSWORD || '',
+    },
   };
 }
 

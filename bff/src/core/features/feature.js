@@ -23,6 +23,8 @@ import { REPO_ROOT } from '../config/env.js';
  * @property {() => Promise<object>} healthReport
  * @property {import('express').RequestHandler[]} guard session + "the role sees this feature's page"
  * @property {(m: string) => void} log
+ * @property {(fn: () => void) => void} onClose a background service the feature runs is stopped with the BFF
+ * @property {(key: string, fn: () => object) => void} addHealth a part of the health report (GET /api/health, System page)
  */
 
 /**

@@ -14,7 +14,9 @@ export function uptimeText(s) {
 }
 
 /**
- * @typedef {{ status: string, ros?: { rosbridge?: boolean, master?: boolean }, uptime_s: number, version: string }} Health
+ * @typedef {{ state: string, since: number, error: string }} PlantLink
+ * @typedef {{ status: string, ros?: { rosbridge?: boolean, master?: boolean }, uptime_s: number, version: string,
+ *   plant?: { broker: string, group_id: string, edge_node_id: string, reporting: PlantLink, view: PlantLink } }} Health
  * @param {Health | null | undefined} health
  * @param {boolean} offline  the BFF did not answer the last poll
  * @returns {{ label: string, ok: boolean, text: string }[]}
@@ -25,5 +27,11 @@ export function healthRows(health, offline) {
     { label: 'BFF', ok: !offline && health.status === 'ok', text: offline ? 'unreachable' : health.status },
     { label: 'rosbridge', ok: !!health.ros?.rosbridge, text: health.ros?.rosbridge ? 'up' : 'down' },
     { label: 'ROS master', ok: !!health.ros?.master, text: health.ros?.master ? 'up' : 'down' },
+    // The plant's broker (cell files with a plant section): this cell's report on it.
+    ...(health.plant && health.plant.reporting.state !== 'off' ? [{
+      label: `Plant broker ${health.plant.broker}`, ok: health.plant.reporting.state === 'connected',
+      text: health.plant.reporting.state === 'down' && health.plant.reporting.error
+        ? `down: ${health.plant.reporting.error}` : health.plant.reporting.state,
+    }] : []),
   ];
 }

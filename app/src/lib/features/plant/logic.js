@@ -1,0 +1,277 @@
+/**
+ * The plant feature's plain logic (no Svelte): the API, reading its answer defensively, the order of the cells and
+ * every text a cell card or the header shows. Tests import it directly.
+ *
+ * API (bff/src/features/plant): GET /api/plant/cells -> { broker, cells } (see PlantData);
+ * GET /api/plant/events -> Server-Sent Events, `event: cells` with the same JSON on connect and after every change.
+ */
+import { request } from '../../core/api.js';
+
+export const FEATURE_ID = 'plant';
+
+/** Where the live feed is (an EventSource URL, same origin). */
+export const EVENTS_URL = '/api/plant/events';
+
+export const plantApi = {
+  cells: () => request('GET', '/api/plant/cells'),
+};
+
+/** @typedef {{ group: string, connected: boolean, mode: string }} PlantRobot */
+/** @typedef {{ name: string, state: string }} PlantModule */
+/**
+ * One robot cell as the plant's broker last heard of it.
+ * @typedef {object} PlantCell
+ * @property {string} id  "group/node"
+ * @property {string} group
+ * @property {string} node
+ * @property {string} name  '' if the cell never sent its birth name
+ * @property {string} url  the cell's own UI, '' if none
+ * @property {boolean} online
+ * @property {number} since  online since / offline since (ms since the epoch)
+ * @property {boolean} ros  the cell's BFF reaches its ROS side
+ * @property {string} mode
+ * @property {string} safety
+ * @property {number} alarms
+ * @property {string} alarm  the most severe active alarm's text
+ * @property {number} severity  -1 none, 0 info, 1 warning, 2 error
+ * @property {string} process
+ * @property {string} operation
+ * @property {number} cycles
+ * @property {number} last_cycle_s  0: none
+ * @property {PlantRobot[]} robots
+ * @property {PlantModule[]} modules
+ * @property {number} updated  ms since the epoch of its last message
+ */
+/** @typedef {{ state: 'connected' | 'connecting' | 'down' | 'off' | string, since: number, error: string }} PlantBroker */
+/** @typedef {{ broker: PlantBroker, cells: PlantCell[] }} PlantData */
+/** @typedef {'alarm' | 'offline' | 'ok'} CellStatusKind */
+
+// ---- reading the answer ----
+
+/** @param {any} v */
+const str = (v) => (typeof v === 'string' ? v : '');
+/** @param {any} v @param {number} [d] */
+const num = (v, d = 0) => (typeof v === 'number' && Number.isFinite(v) ? v : d);
+/** @param {any} v */
+const arr = (v) => (Array.isArray(v) ? v : []);
+
+/** @param {any} c @returns {PlantCell} */
+export function readCell(c) {
+  c = c && typeof c === 'object' ? c : {};
+  const group = str(c.group);
+  const node = str(c.node);
+  return {
+    id: str(c.id) || (group && node ? `${group}/${node}` : node),
+    group,
+    node,
+    name: str(c.name),
+    url: str(c.url),
+    online: c.online === true,
+    since: num(c.since),
+    ros: c.ros !== false,
+    mode: str(c.mode),
+    safety: str(c.safety),
+    alarms: Math.max(0, num(c.alarms)),
+    alarm: str(c.alarm),
+    severity: num(c.severity, -1),
+    process: str(c.process),
+    operation: str(c.operation),
+    cycles: Math.max(0, num(c.cycles)),
+    last_cycle_s: num(c.last_cycle_s),
+    robots: arr(c.robots).map((r) => ({ group: str(r?.group), connected: r?.connected === true, mode: str(r?.mode) })),
+    modules: arr(c.modules).map((m) => ({ name: str(m?.name), state: str(m?.state) })),
+    updated: num(c.updated),
+  };
+}
+
+/**
+ * The answer of GET /api/plant/cells (or one `cells` event's data), with every field typed.
+ * @param {any} data @returns {PlantData}
+ */
+export function readPlant(data) {
+  const b = data?.broker && typeof data.broker === 'object' ? data.broker : {};
+  return {
+    broker: { state: str(b.state) || 'off', since: num(b.since), error: str(b.error) },
+    cells: arr(data?.cells).map(readCell),
+  };
+}
+
+// ---- status and order ----
+
+const CALM_SAFETY = ['normal', ''];
+
+/**
+ * The cell's own UI as a link target: only http(s) URLs (a broker message is not trusted to name a script);
+ * '' for none.
+ * @param {string} url
+ */
+export function cellLink(url) {
+  return /^https?:\/\/[^\s]+$/i.test(url.trim()) ? url.trim() : '';
+}
+
+/** What a card is called: its birth name, or its node id until it sent one. @param {PlantCell} c */
+export const cellName = (c) => c.name || c.node || c.id;
+
+/** An active alarm: an alarm count, an error-level alarm, or a safety state other than normal. @param {PlantCell} c */
+export function hasAlarm(c) {
+  return c.alarms > 0 || c.severity >= 2 || !CALM_SAFETY.includes(c.safety.trim().toLowerCase());
+}
+
+/** @param {number} n @param {string} one @param {string} [many] */
+const plural = (n, one, many = `${one}s`) => `${n} ${n === 1 ? one : many}`;
+
+/** "Protective stop" from "protective stop". @param {string} s */
+const sentence = (s) => (s ? s[0].toUpperCase() + s.slice(1) : s);
+
+/**
+ * The cell's status: alarm (wins, even for an offline cell whose last report had one), offline, ok; with its label.
+ * @param {PlantCell} c @returns {{ status: CellStatusKind, text: string }}
+ */
+export function cellStatus(c) {
+  if (hasAlarm(c)) {
+    const parts = [];
+    if (c.alarms > 0) parts.push(plural(c.alarms, 'active alarm'));
+    if (!CALM_SAFETY.includes(c.safety.trim().toLowerCase())) parts.push(sentence(c.safety.trim()));
+    if (!parts.length) parts.push('Error alarm');
+    if (!c.online) parts.push('offline');
+    return { status: 'alarm', text: sentence(parts.join(' · ')) };
+  }
+  if (!c.online) return { status: 'offline', text: 'Offline' };
+  // Its BFF is up but cannot reach its ROS side: nothing it reports about the cell is current.
+  if (!c.ros) return { status: 'offline', text: 'No ROS data' };
+  return { status: 'ok', text: 'OK' };
+}
+
+const RANK = { alarm: 0, offline: 1, ok: 2 };
+const byName = new Intl.Collator(undefined, { numeric: true, sensitivity: 'base' });
+
+/**
+ * Alarms first, then offline cells, then the rest; by name (node without one) within each, then by id.
+ * Returns a new array.
+ * @param {PlantCell[]} cells
+ */
+export function sortCells(cells) {
+  return [...cells].sort((a, b) =>
+    RANK[cellStatus(a).status] - RANK[cellStatus(b).status]
+    || byName.compare(cellName(a), cellName(b))
+    || (a.id < b.id ? -1 : a.id > b.id ? 1 : 0));
+}
+
+// ---- times ----
+
+const MONTHS = ['Jan', 'Feb', 'Mar', 'Apr', 'May', 'Jun', 'Jul', 'Aug', 'Sep', 'Oct', 'Nov', 'Dec'];
+const pad = (/** @type {number} */ n) => String(n).padStart(2, '0');
+
+/**
+ * A local wall-clock time: "10:32" on the same day as `nowMs`, "24 Nov 10:32" otherwise.
+ * @param {number} ms @param {number} nowMs
+ */
+export function formatClock(ms, nowMs) {
+  const d = new Date(ms);
+  const n = new Date(nowMs);
+  const hm = `${pad(d.getHours())}:${pad(d.getMinutes())}`;
+  const sameDay = d.getFullYear() === n.getFullYear() && d.getMonth() === n.getMonth() && d.getDate() === n.getDate();
+  return sameDay ? hm : `${d.getDate()} ${MONTHS[d.getMonth()]} ${hm}`;
+}
+
+/** A duration, coarse: "40 s", "5 min", "2 h 5 min", "3 d". @param {number} ms */
+export function formatDuration(ms) {
+  const s = Math.max(0, Math.floor(ms / 1000));
+  if (s < 60) return `${s} s`;
+  const m = Math.floor(s / 60);
+  if (m < 60) return `${m} min`;
+  const h = Math.floor(m / 60);
+  if (h < 48) return m % 60 ? `${h} h ${m % 60} min` : `${h} h`;
+  return `${Math.floor(h / 24)} d`;
+}
+
+/**
+ * "since 10:32 (5 min)"; '' when the time is unknown (0 or not a number).
+ * @param {number} sinceMs @param {number} nowMs
+ */
+export function formatSince(sinceMs, nowMs) {
+  if (typeof sinceMs !== 'number' || !Number.isFinite(sinceMs) || sinceMs <= 0) return '';
+  return `since ${formatClock(sinceMs, nowMs)} (${formatDuration(nowMs - sinceMs)})`;
+}
+
+/** "Online since 10:32 (5 min)", "Offline since 10:40 (3 min)", or just "Online"/"Offline". @param {PlantCell} c @param {number} nowMs */
+export function onlineText(c, nowMs) {
+  const since = formatSince(c.since, nowMs);
+  return `${c.online ? 'Online' : 'Offline'}${since ? ` ${since}` : ''}`;
+}
+
+/** A cycle time: "8.3 s", "2 min 5 s"; "—" for none (0) or unknown. @param {number} s */
+export function formatCycleTime(s) {
+  if (typeof s !== 'number' || !Number.isFinite(s) || s <= 0) return '—';
+  if (s < 59.95) return `${s.toFixed(1)} s`;
+  const whole = Math.round(s);
+  return `${Math.floor(whole / 60)} min ${whole % 60} s`;
+}
+
+// ---- the card's lines ----
+
+/**
+ * The alarm line: active (styled as an alarm) when there is an alarm count or an error-level alarm.
+ * @param {PlantCell} c @returns {{ active: boolean, text: string }}
+ */
+export function alarmLine(c) {
+  const active = c.alarms > 0 || c.severity >= 2;
+  if (!active) return { active, text: 'No active alarm' };
+  const count = c.alarms > 0 ? plural(c.alarms, 'active alarm') : 'Error alarm';
+  return { active, text: c.alarm ? `${count}: ${c.alarm}` : count };
+}
+
+/** The safety state when it is not normal ('' otherwise). @param {PlantCell} c */
+export function safetyText(c) {
+  const s = c.safety.trim();
+  return CALM_SAFETY.includes(s.toLowerCase()) ? '' : sentence(s);
+}
+
+/** "running · Pick part", "idle", "—". @param {PlantCell} c */
+export function processText(c) {
+  return [c.process, c.operation].filter(Boolean).join(' · ') || '—';
+}
+
+/** "ur5: connected, RUNNING", "ur5: not connected". @param {PlantRobot} r */
+export function robotText(r) {
+  const name = r.group || 'robot';
+  if (!r.connected) return `${name}: not connected`;
+  return r.mode ? `${name}: connected, ${r.mode}` : `${name}: connected`;
+}
+
+/** "3 of 4 modules active"; '' with no modules. @param {PlantModule[]} modules */
+export function modulesText(modules) {
+  if (!modules.length) return '';
+  const active = modules.filter((m) => m.state.toLowerCase() === 'active').length;
+  return `${active} of ${modules.length} ${modules.length === 1 ? 'module' : 'modules'} active`;
+}
+
+// ---- the header ----
+
+/**
+ * The plant link's state as a badge tone and a label.
+ * @param {PlantBroker} b @returns {{ tone: 'ok' | 'info' | 'danger' | 'neutral', text: string }}
+ */
+export function brokerView(b) {
+  switch (b.state) {
+    case 'connected': return { tone: 'ok', text: 'Broker connected' };
+    case 'connecting': return { tone: 'info', text: 'Connecting to the broker…' };
+    case 'down': return { tone: 'danger', text: b.error ? `Broker unreachable: ${b.error}` : 'Broker unreachable' };
+    case 'off': return { tone: 'neutral', text: 'Broker off: the plant link is not configured' };
+    default: return { tone: 'neutral', text: `Broker ${b.state || 'unknown'}` };
+  }
+}
+
+/** "2 cells, 1 with alarms", "3 cells, none with alarms, 1 offline". @param {PlantCell[]} cells */
+export function countText(cells) {
+  let alarms = 0;
+  let offline = 0;
+  for (const c of cells) {
+    const s = cellStatus(c).status;
+    if (s === 'alarm') alarms++;
+    else if (s === 'offline') offline++;
+  }
+  const parts = [plural(cells.length, 'cell'), `${alarms || 'none'} with alarms`];
+  if (offline) parts.push(`${offline} offline`);
+  return parts.join(', ');
+}
