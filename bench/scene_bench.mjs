@@ -60,13 +60,18 @@ function mover() {
   };
 }
 
+// BENCH_GPU=swiftshader: Chromium treats SwiftShader as a GPU (ANGLE), so it composites the page on that "GPU" as a
+// phone's Chromium does on its real one, instead of software compositing, which reads every WebGL frame back to the
+// renderer and waits for it (docs/performance.md, "3D view"). Still all on this machine's CPU.
+const GPU = process.env.BENCH_GPU === 'swiftshader'
+  ? ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'] : [];
 const stack = await startStack(env);
 const browser = await chromium.launch({ executablePath: process.env.CHROMIUM_PATH || '/usr/bin/chromium',
-  args: ['--no-sandbox', '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'] });
+  args: ['--no-sandbox', '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run', ...GPU] });
 const arm = mover();
 try {
   await arm.opened;
-  console.log(`3D view, demo cell, the arm moving ${c1} <-> ${c2} (move_named, default speed), ${SECONDS} s per run${QUICK ? ' (quick)' : ''}`);
+  console.log(`3D view, demo cell, the arm moving ${c1} <-> ${c2} (move_named, default speed), ${SECONDS} s per run${QUICK ? ' (quick)' : ''}, compositing: ${GPU.length ? 'GPU (SwiftShader)' : 'software'}`);
   console.log('  profile                  | arm     | view frames/s | page animation frames/s');
   for (const [name, device, rate] of [['desktop (Desktop Chrome)', 'Desktop Chrome', 1], ['phone (Pixel 7), CPU 4x', 'Pixel 7', 4]]) {
     const context = await browser.newContext({ ...devices[device], baseURL: `http://localhost:${port}` });

@@ -28,6 +28,8 @@ test('the plant page lists both cells; a fault on one shows as its alarm within 
   await expect(other).toContainText('Twin-arm hand-over cell');
   await expect(other.getByTestId('plant-cell-ros')).toHaveText('ROS link down');
   await expect(page.getByTestId('plant-count')).toContainText('2 cells');
+  // The shift so far, as the plant view counted it (this stack's demo cell runs no process here).
+  await expect(demo.getByTestId('plant-cell-shift')).toContainText(/^\d+ cycles? in the last hour · running \d+ % of /);
 
   // The alarm status on ROS (the stack's rosbridge, as the plant reporter reads it): the clock starts there.
   const ws = new WebSocket(/** @type {string} */ (process.env.E2E_ROSBRIDGE_URL));

@@ -11,6 +11,7 @@ import { EdgeSession, cellMetrics, decode, parseTopic, topicOf, asksRebirth, reb
 import { CellReport, cellShape } from '../../src/features/plant/report.js';
 import { PlantHost } from '../../src/features/plant/host.js';
 import { EdgeNode } from '../../src/features/plant/edge-node.js';
+import { ShiftStats } from '../../src/features/plant/shift.js';
 import { brokerOptions } from '../../src/features/plant/mqtt-link.js';
 import { REPO_ROOT } from '../../src/core/config/env.js';
 import { tempDir, startBff, login } from '../helpers.js';
@@ -288,4 +289,39 @@ test('the edge node: birth on connect, changes at most every min_interval_ms, re
   assert.equal(decode(f.published.at(-1)?.payload ?? Buffer.alloc(0))?.metrics.find((m) => m.name === 'bdSeq')?.value, 1);
   node.close();
   assert.equal(f.published.at(-1)?.topic, 'spBv1.0/g/NDEATH/n');
+});
+
+test('shift statistics: cycles in the last hour across runs, the share of the shift spent running (offline is not)', () => {
+  const H = 3600_000;
+  const s = new ShiftStats({ shiftMs: 8 * H });
+  s.observe(0, { online: true, mode: 'idle', cycles: 0 });
+  s.observe(0.5 * H, { online: true, mode: 'running', cycles: 0 });
+  s.observe(0.75 * H, { online: true, mode: 'running', cycles: 5 });
+  s.observe(1.25 * H, { online: true, mode: 'running', cycles: 9 });
+  // A new run counts from 0 again: its 2 cycles are new ones.
+  s.observe(1.3 * H, { online: true, mode: 'running', cycles: 2 });
+  s.observe(1.5 * H, { online: false, mode: 'running', cycles: 2 });
+  s.observe(2 * H, { online: true, mode: 'idle', cycles: 2 });
+  let st = s.stats(2 * H);
+  assert.equal(st.cycles_last_hour, 4 + 2, 'the 5 at 0.75 h are more than an hour old');
+  assert.equal(st.observed_s, 7200);
+  assert.ok(Math.abs(/** @type {number} */ (st.running_share) - 0.5) < 1e-9, String(st.running_share)); // 0.5 h to 1.5 h of 2 h
+  // Later than the shift: only its last 8 h count (idle since 2 h).
+  st = s.stats(10 * H);
+  assert.equal(st.cycles_last_hour, 0);
+  assert.equal(st.observed_s, 8 * 3600);
+  assert.equal(st.running_share, 0);
+  assert.equal(new ShiftStats().stats(5).running_share, null);
+});
+
+test('the host gives each cell its shift statistics', () => {
+  const { h, now } = host();
+  const s = new EdgeSession(cellMetrics(cellShape(demo)));
+  h.onMessage('spBv1.0/plant-a/NBIRTH/demo-ur5', s.birth({ Mode: 'running', 'Process/Cycles done': 1 }, 1));
+  now.t += 60_000;
+  h.onMessage('spBv1.0/plant-a/NDATA/demo-ur5', /** @type {Uint8Array} */ (s.data({ Mode: 'running', 'Process/Cycles done': 4 }, 2)));
+  now.t += 60_000;
+  h.onMessage('spBv1.0/plant-a/NDATA/demo-ur5', /** @type {Uint8Array} */ (s.data({ Mode: 'idle', 'Process/Cycles done': 4 }, 3)));
+  now.t += 120_000;
+  assert.deepEqual(h.cells()[0].shift, { cycles_last_hour: 3, running_share: 0.5, observed_s: 240 });
 });

@@ -1,7 +1,7 @@
 // @vitest-environment node
 import { describe, it, expect } from 'vitest';
 import {
-  readPlant, readCell, cellName, cellLink, hasAlarm, cellStatus, sortCells, formatClock, formatDuration, formatSince,
+  readPlant, readCell, shiftText, cellName, cellLink, hasAlarm, cellStatus, sortCells, formatClock, formatDuration, formatSince,
   onlineText, formatCycleTime, alarmLine, safetyText, processText, robotText, modulesText, brokerView, countText,
 } from '../../../src/lib/features/plant/logic.js';
 
@@ -219,3 +219,17 @@ describe('header', () => {
     expect(countText([])).toBe('0 cells, none with alarms');
   });
 });
+
+describe('shiftText', () => {
+  it('cycles in the last hour and the share of the shift spent running', () => {
+    expect(shiftText(cell({ shift: { cycles_last_hour: 12, running_share: 0.854, observed_s: 7800 } })))
+      .toBe('12 cycles in the last hour · running 85 % of 2 h 10 min');
+    expect(shiftText(cell({ shift: { cycles_last_hour: 1, running_share: null, observed_s: 0 } }))).toBe('1 cycle in the last hour');
+    expect(shiftText(cell())).toBe('');
+  });
+  it('reads it defensively', () => {
+    expect(cell({ shift: { cycles_last_hour: -3, running_share: 7, observed_s: 'x' } }).shift).toEqual({ cycles_last_hour: 0, running_share: 1, observed_s: 0 });
+    expect(cell({ shift: 'no' }).shift).toBeNull();
+  });
+});
+

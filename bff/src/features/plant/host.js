@@ -2,6 +2,7 @@
 // their births, data and deaths. It only reads; the one thing it sends is a rebirth request (NCMD) to a node whose
 // messages it cannot place (one heard before its birth, or a gap in its seq), as the specification asks.
 import { topicOf, parseTopic, decode, rebirthCommand } from './sparkplug.js';
+import { ShiftStats } from './shift.js';
 
 /**
  * @typedef {object} PlantCell one edge node as the plant page shows it
@@ -12,9 +13,11 @@ import { topicOf, parseTopic, decode, rebirthCommand } from './sparkplug.js';
  * @property {{group: string, connected: boolean, mode: string}[]} robots
  * @property {{name: string, state: string}[]} modules
  * @property {number} updated
+ * @property {{cycles_last_hour: number, running_share: number | null, observed_s: number}} shift cycles in the last
+ *   hour, and the share of the shift (8 h, or since the view first heard of the cell) spent running
  */
 
-/** @param {Map<string, any>} m @returns {Omit<PlantCell, 'id'|'group'|'node'|'online'|'since'|'updated'>} */
+/** @param {Map<string, any>} m @returns {Omit<PlantCell, 'id'|'group'|'node'|'online'|'since'|'updated'|'shift'>} */
 export function cellView(m) {
   const s = (/** @type {string} */ k) => (typeof m.get(k) === 'string' ? m.get(k) : '');
   const n = (/** @type {string} */ k, d = 0) => (typeof m.get(k) === 'number' ? m.get(k) : d);
@@ -57,6 +60,8 @@ export class PlantHost {
     this.now = now;
     /** @type {Map<string, {group: string, node: string, metrics: Map<string, any>, online: boolean, since: number, seq: number, bdSeq: number | null, updated: number, born: boolean}>} */
     this.nodes = new Map();
+    /** @type {Map<string, ShiftStats>} */
+    this.shifts = new Map();
     /** @type {Map<string, number>} when each node was last asked for a rebirth */
     this.asked = new Map();
   }
@@ -85,6 +90,7 @@ export class PlantHost {
         group: t.group, node: t.node, metrics, online: true, since: n?.online ? n.since : now, seq: p.seq ?? 0,
         bdSeq: typeof bd === 'number' ? bd : null, updated: now, born: true,
       });
+      this.observe(id);
       this.onChange();
     } else if (t.type === 'NDATA') {
       if (!n?.born || !n.online) return this.rebirth(t.group, t.node, 'data before its birth');
@@ -92,6 +98,7 @@ export class PlantHost {
       n.seq = p.seq ?? expected;
       n.updated = now;
       for (const m of p.metrics) n.metrics.set(m.name, m.value);
+      this.observe(id);
       this.onChange();
       if (p.seq !== null && p.seq !== expected) this.rebirth(t.group, t.node, `seq ${p.seq} after ${(expected + 255) % 256}`);
     } else if (t.type === 'NDEATH') {
@@ -101,8 +108,18 @@ export class PlantHost {
       n.online = false;
       n.since = now;
       n.updated = now;
+      this.observe(id);
       this.onChange();
     }
+  }
+
+  /** @param {string} id */
+  observe(id) {
+    const n = this.nodes.get(id);
+    if (!n) return;
+    let s = this.shifts.get(id);
+    if (!s) this.shifts.set(id, (s = new ShiftStats()));
+    s.observe(this.now(), { online: n.online, mode: n.metrics.get('Mode'), cycles: n.metrics.get('Process/Cycles done') });
   }
 
   /** @param {string} group @param {string} node @param {string} why */
@@ -119,6 +136,7 @@ export class PlantHost {
   cells() {
     return [...this.nodes.entries()].map(([id, n]) => ({
       id, group: n.group, node: n.node, online: n.online, since: n.since, updated: n.updated, ...cellView(n.metrics),
+      shift: (this.shifts.get(id) ?? new ShiftStats()).stats(this.now()),
     }));
   }
 }

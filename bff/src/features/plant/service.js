@@ -74,6 +74,10 @@ export class PlantService {
         });
       });
       client.on('message', (topic, payload) => host.onMessage(topic, payload));
+      // The shift's running share moves with time: the page gets it again twice a minute.
+      const tick = setInterval(() => this.emit(), 30_000);
+      tick.unref();
+      this.closers.push(() => clearInterval(tick));
       this.closers.push(() => {
         const cl = /** @type {import('mqtt').MqttClient} */ (client);
         if (cl.connected) cl.publish(stateTopic, JSON.stringify({ online: false, timestamp: Date.now() }), { qos: 1, retain: true }, () => cl.end(true));

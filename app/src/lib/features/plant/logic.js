@@ -41,6 +41,12 @@ export const plantApi = {
  * @property {PlantRobot[]} robots
  * @property {PlantModule[]} modules
  * @property {number} updated  ms since the epoch of its last message
+ * @property {PlantShift | null} shift  what the plant view counted of its shift (null: the server sent none)
+ */
+/**
+ * @typedef {{ cycles_last_hour: number, running_share: number | null, observed_s: number }} PlantShift
+ *   cycles completed in the last hour; the share of the shift (8 h, or since the view first heard of the cell) in
+ *   operation mode "running", null before any time passed
  */
 /** @typedef {{ state: 'connected' | 'connecting' | 'down' | 'off' | string, since: number, error: string }} PlantBroker */
 /** @typedef {{ broker: PlantBroker, cells: PlantCell[] }} PlantData */
@@ -81,6 +87,11 @@ export function readCell(c) {
     robots: arr(c.robots).map((r) => ({ group: str(r?.group), connected: r?.connected === true, mode: str(r?.mode) })),
     modules: arr(c.modules).map((m) => ({ name: str(m?.name), state: str(m?.state) })),
     updated: num(c.updated),
+    shift: c.shift && typeof c.shift === 'object' ? {
+      cycles_last_hour: Math.max(0, num(c.shift.cycles_last_hour)),
+      running_share: typeof c.shift.running_share === 'number' && Number.isFinite(c.shift.running_share) ? Math.min(1, Math.max(0, c.shift.running_share)) : null,
+      observed_s: Math.max(0, num(c.shift.observed_s)),
+    } : null,
   };
 }
 
@@ -209,6 +220,18 @@ export function formatCycleTime(s) {
 }
 
 // ---- the card's lines ----
+
+/**
+ * "12 cycles in the last hour · running 85 % of 2 h 10 min"; '' without statistics.
+ * @param {PlantCell} c
+ */
+export function shiftText(c) {
+  const s = c.shift;
+  if (!s) return '';
+  const cycles = `${s.cycles_last_hour} ${s.cycles_last_hour === 1 ? 'cycle' : 'cycles'} in the last hour`;
+  if (s.running_share === null || s.observed_s <= 0) return cycles;
+  return `${cycles} · running ${Math.round(s.running_share * 100)} % of ${formatDuration(s.observed_s * 1000)}`;
+}
 
 /**
  * The alarm line: active (styled as an alarm) when there is an alarm count or an error-level alarm.
