@@ -53,6 +53,24 @@ async function mosquitto(port) {
   return p;
 }
 
+/** A TCP relay to the broker that can go silent without closing anything (a cable pulled). @param {number} to */
+async function halfOpenProxy(to) {
+  let frozen = false;
+  /** @type {net.Socket[]} */
+  const held = [];
+  const server = net.createServer((a) => {
+    const b = net.connect({ host: '127.0.0.1', port: to });
+    held.push(a, b);
+    a.on('data', (d) => { if (!frozen) b.write(d); });
+    b.on('data', (d) => { if (!frozen) a.write(d); });
+    a.on('error', () => {});
+    b.on('error', () => {});
+  });
+  await new Promise((r) => server.listen(0, '127.0.0.1', () => r(null)));
+  cleanup.push(() => { for (const x of held) x.destroy(); server.close(); });
+  return { port: /** @type {net.AddressInfo} */ (server.address()).port, freeze: () => { frozen = true; } };
+}
+
 /** A rosbridge stand-in: remembers what each client subscribed and publishes to it. */
 async function rosbridge() {
   const wss = new WebSocketServer({ port: 0, host: '127.0.0.1' });
@@ -177,6 +195,24 @@ test('two cells report to a real broker: births, every change, a SIGKILLed BFF\'
   assert.equal(/** @type {any} */ (last('twin-arm', 'NDEATH')).metrics.bdSeq, birth.metrics.bdSeq);
   await until(async () => (await demo.get('/api/plant/cells')).cells.find((/** @type {any} */ c) => c.node === 'twin-arm')?.online === false, 2_000, 'the plant page to show the twin cell offline');
   assert.ok(Date.now() - killedAt <= KEEPALIVE_S * 1500 + 2000);
+
+  // The cell's PC cut off (its connection half-open: the broker hears nothing, sees no close) and the cell started
+  // again within the keep-alive: the old connection's will must not take the new session for dead. The new
+  // connection takes the old one's session over (the same client id), so the broker sends the old will then, before
+  // the new birth; and the new process's bdSeq is not the old one's.
+  const twinBirths = () => seen.filter((m) => m.node === 'twin-arm' && m.type === 'NBIRTH').length;
+  const before = twinBirths();
+  const cut = await halfOpenProxy(brokerPort);
+  const twin2 = await cellBff('config/twin-arm-cell.yaml', rbTwin.port, `mqtt://127.0.0.1:${cut.port}`);
+  await until(() => twinBirths() > before, 10_000, 'the twin cell born again');
+  cut.freeze();
+  twin2.proc.kill('SIGKILL');
+  const twin3 = await cellBff('config/twin-arm-cell.yaml', rbTwin.port, url);
+  await until(() => twinBirths() > before + 1, 10_000, 'the restarted twin cell\'s birth');
+  await new Promise((r) => setTimeout(r, KEEPALIVE_S * 1500 + 1000)); // past the killed process's keep-alive
+  const view = (await demo.get('/api/plant/cells')).cells.find((/** @type {any} */ c) => c.node === 'twin-arm');
+  assert.equal(view?.online, true, JSON.stringify(seen.filter((m) => m.node === 'twin-arm').map((m) => [m.type, m.metrics.bdSeq])));
+  twin3.proc.kill('SIGKILL');
 
   // A dead broker: the cell's own API goes on, its System page says the link is down.
   broker.kill('SIGKILL');

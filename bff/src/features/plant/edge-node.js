@@ -18,7 +18,11 @@ export class EdgeNode {
    * @param {typeof import('mqtt').connect} [o.connect]
    */
   constructor({ url, options, groupId, nodeId, defs, values, minIntervalMs = 200, keepaliveS = 10, log = () => {}, onState, connect }) {
-    this.session = new EdgeSession(defs);
+    // A restarted BFF must not repeat its last bdSeq: the broker may publish the old process's will after the new
+    // birth, and a host would take that death for the new session's. So a random start, and a client id of its own
+    // (not per process): a new connection takes the old one's session over, and the broker publishes the old will
+    // at once, before the new birth.
+    this.session = new EdgeSession(defs, Math.floor(Math.random() * 256));
     this.values = values;
     this.minIntervalMs = minIntervalMs;
     this.topic = (/** @type {any} */ type) => topicOf(groupId, type, nodeId);
@@ -29,7 +33,7 @@ export class EdgeNode {
     const will = () => ({ topic: this.topic('NDEATH'), payload: Buffer.from(this.session.death(Date.now())), qos: /** @type {const} */ (1), retain: false });
     const { client, state } = connectWithBackoff({
       url, who: `plant edge node ${groupId}/${nodeId}`, log, onState, connect,
-      options: { ...options, clean: true, keepalive: keepaliveS, clientId: `cell-${groupId}-${nodeId}-${process.pid}`, will: will() },
+      options: { ...options, clean: true, keepalive: keepaliveS, clientId: `cell-${groupId}-${nodeId}`, will: will() },
     });
     this.client = client;
     this.state = state;

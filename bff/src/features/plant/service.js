@@ -63,7 +63,7 @@ export class PlantService {
         url, who: `plant view ${groups.join(', ')}`, log,
         onState: (s) => { this.viewLink = s; this.emit(); },
         options: {
-          ...options, clean: true, keepalive: section.keepalive_s ?? 10, clientId: `plant-view-${nodeId}-${process.pid}`,
+          ...options, clean: true, keepalive: section.keepalive_s ?? 10, clientId: `plant-view-${nodeId}`,
           will: { topic: stateTopic, payload: Buffer.from(JSON.stringify({ online: false, timestamp: Date.now() })), qos: 1, retain: true },
         },
       });

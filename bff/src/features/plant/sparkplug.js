@@ -65,11 +65,11 @@ function metric(d, value, timestamp) {
  * was last reported, so NDATA carries only what changed (report by exception).
  */
 export class EdgeSession {
-  /** @param {MetricDef[]} defs */
-  constructor(defs) {
+  /** @param {MetricDef[]} defs @param {number} [bdSeq] the first connection's (0..255) */
+  constructor(defs, bdSeq = 0) {
     this.defs = defs;
     this.byName = new Map(defs.map((d) => [d.name, d]));
-    this.bdSeq = 0;
+    this.bdSeq = bdSeq;
     this.seq = 0;
     /** @type {Map<string, MetricValue>} */
     this.sent = new Map();
