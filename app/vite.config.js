@@ -1,6 +1,8 @@
 import { sveltekit } from '@sveltejs/kit/vite';
 import { SvelteKitPWA } from '@vite-pwa/sveltekit';
 import { defineConfig } from 'vite';
+import { paraglideVitePlugin } from '@inlang/paraglide-js';
+import { i18nOptions } from './i18n.config.js';
 
 // (process via globalThis: the app's checkJs has no Node types.)
 const env = /** @type {any} */ (globalThis).process.env;
@@ -9,6 +11,8 @@ const testing = !!env.VITEST;
 
 export default defineConfig({
   plugins: [
+    // Unit tests run on messages compiled beforehand (`npm test`): the plugin's watcher keeps Vitest from exiting.
+    !testing && paraglideVitePlugin(i18nOptions),
     sveltekit(),
     // The service worker is irrelevant to unit tests and slows them down.
     !testing &&
