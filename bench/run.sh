@@ -9,7 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-read -r -a NAMES <<< 'rosbridge relay sim manual manual-iiwa sensors scene backpressure video image-relay recorder logstorm soak'
+read -r -a NAMES <<< 'rosbridge relay sim manual manual-iiwa sensors scene login backpressure video image-relay recorder logstorm soak'
 declare -A WHAT=(
   [rosbridge]='rosbridge server (direct)'
   [relay]='BFF relay path'
@@ -18,6 +18,7 @@ declare -A WHAT=(
   [manual-iiwa]='manual motion on a ros_control arm, the iiwa cell: hold-to-run jog through the page'
   [sensors]='sensors page: six 100 Hz series on a phone, CPU throttled 4x'
   [scene]='3D view while the arm moves: desktop, and a phone with the CPU throttled 4x'
+  [login]='login form usable on a mid-range phone (4x CPU, 1.6 Mbit/s, 150 ms RTT), cold and from the service worker; its JavaScript bytes; English and Spanish'
   [backpressure]='BFF back-pressure: slow link, 80 ms link, stalled reader, fast clients beside a stalled one'
   [video]='raw 720p camera at 30 Hz to 5 phone viewers through the video node and the BFF, against full-size JPEG to each'
   [image-relay]='relay CPU per image frame: a 30 Hz x 30 KB JPEG to 5 viewers, rosbridge_suite direct vs ours direct vs the BFF path (reference: bench/reference/rosbridge_suite.sh setup)'
@@ -27,11 +28,11 @@ declare -A WHAT=(
 )
 declare -A FULL=(
   [rosbridge]='7 scenarios x 5 s' [relay]='3 x 5 s' [sim]='15 s' [manual]='5 runs each' [manual-iiwa]='5 runs each'
-  [sensors]='3 x 10 s' [scene]='4 x 8 s' [backpressure]='slow 60 s, rtt 30 s, stall 300 s, fast 4 x 20 s' [video]='2 x 20 s' [image-relay]='3 rounds x 3 x 15 s' [recorder]='150 s' [logstorm]='60 s' [soak]='10 x 1 min (by name only)'
+  [sensors]='3 x 10 s' [scene]='4 x 8 s' [login]='5 runs per language' [backpressure]='slow 60 s, rtt 30 s, stall 300 s, fast 4 x 20 s' [video]='2 x 20 s' [image-relay]='3 rounds x 3 x 15 s' [recorder]='150 s' [logstorm]='60 s' [soak]='10 x 1 min (by name only)'
 )
 declare -A QUICK=(
   [rosbridge]='7 x 1.5 s' [relay]='3 x 1.5 s' [sim]='4 s' [manual]='3 runs each' [manual-iiwa]='3 runs each'
-  [sensors]='3 x 3 s' [scene]='4 x 3 s' [backpressure]='slow 10 s, rtt 10 s, stall 10 s, fast 2 x 2 s' [video]='2 x 5 s' [image-relay]='3 x 5 s' [recorder]='25 s' [logstorm]='15 s' [soak]='3 "minutes" of 8 s'
+  [sensors]='3 x 3 s' [scene]='4 x 3 s' [login]='2 runs per language' [backpressure]='slow 10 s, rtt 10 s, stall 10 s, fast 2 x 2 s' [video]='2 x 5 s' [image-relay]='3 x 5 s' [recorder]='25 s' [logstorm]='15 s' [soak]='3 "minutes" of 8 s'
 )
 
 usage() {
@@ -82,6 +83,7 @@ run_one() {
     manual-iiwa) BENCH_CELL=config/iiwa-cell.yaml node bench/manual_bench.mjs ;;
     sensors) node bench/sensors_bench.mjs ;;
     scene) node bench/scene_bench.mjs ;;
+    login) node bench/login_bench.mjs ;;
     backpressure) node bench/bff_backpressure_bench.mjs ;;
     video) node bench/video_bench.mjs ;;
     image-relay) node bench/image_relay_bench.mjs ;;

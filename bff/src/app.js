@@ -20,7 +20,7 @@ import { RosRelay } from './core/ros/relay.js';
 import { createOpGuard } from './core/ros/op-guard.js';
 import { requireSession, requirePage } from './core/http/guards.js';
 import { buildOpenApi, validateRequests, methodNotAllowed, STATE_CHANGING } from './core/http/openapi.js';
-import { httpError } from './core/http/errors.js';
+import { errorBody, httpError } from './core/http/errors.js';
 import { staticApp, contentSecurityPolicy } from './core/http/static.js';
 import { FEATURES } from './features/index.js';
 
@@ -105,7 +105,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
   app.use('/api', express.json({ limit: '64kb', type: (req) => STATE_CHANGING(req.method) && Boolean(/** @type {express.Request} */ (req).is('application/json')) }));
   app.use('/api', (req, res, next) => {
     // State-changing requests must come from our own origin (the cookie is SameSite=Strict too).
-    if (req.method !== 'GET' && req.method !== 'HEAD' && !sameOrigin(req)) return res.status(403).json({ error: 'cross-origin request refused' });
+    if (req.method !== 'GET' && req.method !== 'HEAD' && !sameOrigin(req)) return res.status(403).json(errorBody('cross-origin request refused', 'request.cross_origin'));
     req.session = authenticate(req);
     // Sliding session: a token past half its life is replaced while the app is in use.
     if (req.session && tokens.needsRenewal(req.session.claims) && req.path !== '/auth/logout') {
@@ -147,7 +147,7 @@ export async function createBff(env, { log = (m) => console.log(m), throttle = n
     if (res.headersSent) return next(err);
     const e = httpError(err);
     if (!e.clientError) log(`error on ${req.method} ${req.originalUrl}: ${err?.stack || err}`);
-    res.status(e.status).json({ error: e.message });
+    res.status(e.status).json(e.code ? errorBody(e.message, e.code, e.params) : { error: e.message });
   });
 
   return { app, relay, cell, features, grants, openapi, users, tokens, audit, lease, initial, close: () => { relay.close(); awake.stop(); for (const c of closers) c(); } };

@@ -43,7 +43,7 @@ test('an operator starts the process, pauses, resumes, stops and runs one operat
   await clickStart(page);
   await expect(state).toHaveText('Running');
   const current = page.locator('[data-testid="operation"][data-current="true"]');
-  await expect(current).toContainText('pick part');
+  await expect(current).toContainText('Pick part');
   await expect(log).toContainText(/start/i);
 
   // Pause: the running step ends, then the arm holds.
@@ -70,7 +70,7 @@ test('an operator starts the process, pauses, resumes, stops and runs one operat
   // Run step: one chosen operation, then idle again. Judged by the log's newest entry, not by the operation shown as
   // current: stopped next to home, "return home" can be over within a second (CI once missed it being current).
   await expect(log.getByRole('listitem').first()).toContainText(/stop/i);
-  await page.getByRole('radio', { name: /return home/ }).check();
+  await page.getByRole('radio', { name: /Return home/ }).check();
   await page.getByRole('button', { name: 'Run step' }).click();
   await expect(log.getByRole('listitem').first()).toContainText("Done: operation 'return home' done", { timeout: 60_000 });
   await expect(state).toHaveText('Idle', { timeout: 10_000 });

@@ -538,7 +538,7 @@ test('an operator whose role does not see the page gets 403; no session 401', as
   for (const p of ['/api/scene/arms/arm/urdf', '/api/scene/arms/arm/meshes/0/link_1.stl']) {
     const res = await get(p, { cookie: operator });
     assert.equal(res.status, 403, p);
-    assert.deepEqual(await res.json(), { error: 'role "operator" may not use scene' });
+    assert.deepEqual(await res.json(), { error: 'role "operator" may not use scene', code: 'access.page_denied', params: { role: 'operator', page: 'scene' } });
     assert.equal((await get(p, { cookie: null })).status, 401, p);
   }
 });

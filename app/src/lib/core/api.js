@@ -2,7 +2,9 @@
  * Thin JSON client for the BFF (same origin, cookie session).
  * It never throws: every call resolves to an ApiResult so callers can tell
  * "logged out" (401) from "offline" (network error) without try/catch chains.
+ * A refusal's `error` is in the user's language when the BFF gave its code (core/errors.js).
  */
+import { errorText } from './errors.js';
 
 /**
  * @typedef {{ kind: 'ok', status: number, data: any }
@@ -44,7 +46,7 @@ export async function request(method, path, body, fetchImpl = globalThis.fetch, 
   }
   const data = await readJson(res);
   if (res.ok) return { kind: 'ok', status: res.status, data };
-  const error = (data && typeof data.error === 'string' && data.error) || res.statusText || `HTTP ${res.status}`;
+  const error = errorText(data) || res.statusText || `HTTP ${res.status}`;
   if (res.status === 401) return { kind: 'unauthorized', status: 401, error, data };
   if (res.status === 403) return { kind: 'forbidden', status: 403, error, data };
   return { kind: 'error', status: res.status, error, data };
@@ -66,6 +68,8 @@ export const api = {
   login: (username, password) => request('POST', '/api/auth/login', { username, password }),
   logout: () => request('POST', '/api/auth/logout'),
   me: () => request('GET', '/api/auth/me'),
+  /** @param {{ locale: string | null }} prefs */
+  preferences: (prefs) => request('PUT', '/api/auth/me/preferences', prefs),
   config: () => request('GET', '/api/config'),
   health: () => request('GET', '/api/health'),
   system: () => request('GET', '/api/system'),

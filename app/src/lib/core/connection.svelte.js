@@ -16,6 +16,8 @@
  * ConnectionLostError (their outcome is unknown). Commands never run late.
  */
 
+import { m } from '$lib/paraglide/messages.js';
+
 /** @typedef {'connecting' | 'connected' | 'disconnected'} ConnState */
 /**
  * What the connection indicator shows: the state, except that a link that was up and dropped reads
@@ -85,16 +87,19 @@ export const roslibFactory = {
 
 /** Raised at once when a command is attempted without a live connection (nothing is queued). */
 export class NotConnectedError extends Error {
+  /** @param {'command' | 'message' | 'service call' | 'goal'} [what] */
   constructor(what = 'command') {
-    super(`Not connected to ROS: the ${what} was not sent`);
+    super(what === 'message' ? m.core_not_connected_message() : what === 'service call' ? m.core_not_connected_call()
+      : what === 'goal' ? m.core_not_connected_goal() : m.core_not_connected_command());
     this.name = 'NotConnectedError';
   }
 }
 
 /** The socket dropped before an answer came: the outcome is unknown. */
 export class ConnectionLostError extends Error {
-  constructor(what = 'call') {
-    super(`Connection lost before the ${what} was answered: its outcome is unknown`);
+  /** @param {'call' | 'goal'} kind @param {string} name  the service, or the action server */
+  constructor(kind, name) {
+    super(kind === 'goal' ? m.core_lost_goal({ name }) : m.core_lost_call({ name }));
     this.name = 'ConnectionLostError';
   }
 }
@@ -365,7 +370,7 @@ export class RosConnection {
       const lost = () => {
         if (done) return;
         finish();
-        reject(new ConnectionLostError(`call to ${name}`));
+        reject(new ConnectionLostError('call', name));
       };
       this.#onDown.add(lost);
       if (timeoutMs > 0) {
@@ -464,7 +469,7 @@ export class RosConnection {
         let reject = () => {};
         const result = /** @type {Promise<GoalOutcome>} */ (new Promise((res, rej) => ((resolve = res), (reject = rej))));
         const lost = () => {
-          if (settle(id)) reject(new ConnectionLostError(`goal on ${server}`));
+          if (settle(id)) reject(new ConnectionLostError('goal', server));
         };
         goals.set(id, { resolve, reject, onFeedback: handlers.onFeedback, onStatus: handlers.onStatus, status: null, lost });
         this.#onDown.add(lost);

@@ -5,6 +5,8 @@
  * The server enforces all of this too; the gate only keeps the UI honest and says why a control is off.
  */
 
+import { m } from '$lib/paraglide/messages.js';
+
 /**
  * @typedef {object} GateInput
  * @property {boolean} offline  the BFF is unreachable
@@ -19,14 +21,14 @@
 
 /** @param {GateInput} g @returns {Gate} */
 export function commandGate(g) {
-  if (g.offline) return { ok: false, reason: 'Offline: commands are unavailable' };
+  if (g.offline) return { ok: false, reason: m.core_gate_offline() };
   if (g.conn !== undefined && g.conn !== 'connected') {
-    return { ok: false, reason: g.conn === 'connecting' ? 'Connecting to ROS…' : 'Not connected to ROS' };
+    return { ok: false, reason: g.conn === 'connecting' ? m.core_gate_connecting() : m.core_gate_not_connected() };
   }
   if (g.feature && Array.isArray(g.commands) && !g.commands.includes(g.feature)) {
-    return { ok: false, reason: 'Your role may not send these commands' };
+    return { ok: false, reason: m.core_gate_role() };
   }
-  if (g.needsLease && !g.holdsLease) return { ok: false, reason: 'Take control first' };
+  if (g.needsLease && !g.holdsLease) return { ok: false, reason: m.core_gate_take_control() };
   return { ok: true, reason: '' };
 }
 

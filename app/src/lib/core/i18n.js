@@ -20,11 +20,14 @@ export function isLocale(v) {
 }
 
 /**
- * Switch the language (the page reloads: every text is drawn again in it).
- * @param {Locale} locale
+ * Switch the language (the page reloads: every text is drawn again in it); null: the browser's again.
+ * @param {Locale | null} locale
  */
 export function switchLocale(locale) {
-  if (locale !== getLocale()) setLocale(locale);
+  if (locale === null) {
+    forgetLocale();
+    globalThis.location?.reload();
+  } else if (locale !== getLocale()) setLocale(locale);
 }
 
 /**

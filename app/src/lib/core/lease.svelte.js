@@ -12,6 +12,8 @@
  * with 409 and `ended` saying so. So after losing control to an unreachable server we go on heartbeating
  * (for `reclaimMs`) to hear which it was.
  */
+
+import { m } from '$lib/paraglide/messages.js';
 import { api as defaultApi } from './api.js';
 import { session } from './session.svelte.js';
 
@@ -19,7 +21,7 @@ import { session } from './session.svelte.js';
 /** @typedef {{ reason: string, at: number }} LostNotice */
 
 /** @param {LeaseHolder | null | undefined} h */
-export const holderLabel = (h) => (h ? `${h.username} (${h.role})` : 'nobody');
+export const holderLabel = (h) => (h ? `${h.username} (${h.role})` : m.core_nobody());
 
 export class ControlLease {
   /** Who holds control (null: nobody, as far as we know). @type {LeaseHolder | null} */
@@ -124,7 +126,7 @@ export class ControlLease {
     const epoch = ++this.#epoch;
     this.#reclaimUntil = 0;
     const r = await this.api.controlTake(o.force ? { force: true } : undefined);
-    if (epoch !== this.#epoch) throw new Error('Superseded by a newer control request');
+    if (epoch !== this.#epoch) throw new Error(m.core_lease_superseded());
     if (r.kind === 'ok') {
       this.reachable = true;
       this.lost = null;
@@ -137,7 +139,7 @@ export class ControlLease {
     }
     if (r.kind === 'offline') {
       this.reachable = false;
-      throw new Error('Offline: control was not taken');
+      throw new Error(m.core_lease_offline());
     }
     if (r.kind === 'unauthorized') {
       this.onUnauthorized();
@@ -145,7 +147,7 @@ export class ControlLease {
     }
     this.reachable = true;
     if (r.data && 'holder' in r.data) this.holder = r.data.holder ?? null;
-    throw new Error(r.error || 'Control was not taken');
+    throw new Error(r.error || m.core_lease_not_taken());
   }
 
   /** Give control back. Throws only when the server answers with an error other than "offline". */
@@ -161,7 +163,7 @@ export class ControlLease {
     const r = await this.api.controlRelease();
     if (epoch !== this.#epoch) return;
     if (r.kind === 'unauthorized') this.onUnauthorized();
-    else if (r.kind === 'error') throw new Error(r.error || 'Release failed');
+    else if (r.kind === 'error') throw new Error(r.error || m.core_lease_release_failed());
     this.reachable = r.kind !== 'offline';
     if (this.#watchers > 0) this.#tick();
   }
@@ -223,7 +225,7 @@ export class ControlLease {
       this.reachable = true;
       const wasYou = this.#you;
       this.#apply(r.data);
-      if (wasYou && !this.#you) this.#lose(this.holder ? `taken over by ${holderLabel(this.holder)}` : 'the lease expired');
+      if (wasYou && !this.#you) this.#lose(this.holder ? m.core_lease_taken_over({ holder: holderLabel(this.holder) }) : m.core_lease_expired());
     } else if (r.kind === 'offline') {
       this.reachable = false;
     } else if (r.kind === 'unauthorized') {
@@ -246,20 +248,20 @@ export class ControlLease {
       this.#reclaimUntil = 0;
       this.#apply(r.data);
       if (!this.#you) {
-        if (!reclaiming) this.#lose('the server no longer counts this session as the holder');
+        if (!reclaiming) this.#lose(m.core_lease_not_holder());
         return;
       }
       if (reclaiming) this.lost = null;
       const resumed = r.data?.holder?.resumed_at;
       if (resumed && resumed !== this.#resumedSeen) {
         this.#resumedSeen = resumed;
-        this.kept = { reason: 'the server restarted and gave control back to you; motion stopped while it was away', at: this.now() };
+        this.kept = { reason: m.core_lease_kept(), at: this.now() };
       }
       return;
     }
     if (r.kind === 'unauthorized') {
       this.#reclaimUntil = 0;
-      this.#lose('the session ended');
+      this.#lose(m.core_lease_session_ended());
       this.onUnauthorized();
       return;
     }
@@ -268,7 +270,7 @@ export class ControlLease {
       // The server drops a silent holder after its timeout, unless it restarts in time and gives control back:
       // lose it now, and keep asking for a while.
       if (!reclaiming && this.now() - this.#lastOk > this.timeoutMs) {
-        this.#lose('the server could not be reached');
+        this.#lose(m.core_lease_unreachable());
         this.#reclaimUntil = this.now() + this.reclaimMs;
       }
       return;
@@ -280,7 +282,7 @@ export class ControlLease {
       this.holder = h;
       // ended: the server's own account, when it has one (e.g. control lapsed while it restarted)
       const ended = typeof r.data?.ended === 'string' ? r.data.ended : null;
-      this.#lose(ended ?? (h ? `taken over by ${holderLabel(h)}` : 'the lease expired (no heartbeat reached the server in time)'));
+      this.#lose(ended ?? (h ? m.core_lease_taken_over({ holder: holderLabel(h) }) : m.core_lease_expired_heartbeat()));
     }
   }
 

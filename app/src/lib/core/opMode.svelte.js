@@ -8,6 +8,8 @@
  * show it marked stale with its age.
  */
 
+import { m } from '$lib/paraglide/messages.js';
+
 /** Badge colour per known mode; unknown modes fall back to neutral. */
 export const MODE_TONES = /** @type {Record<string, string>} */ ({
   idle: 'neutral',
@@ -25,7 +27,15 @@ export function modeTone(mode) {
 
 /** @param {string | null | undefined} mode */
 export function modeLabel(mode) {
-  return mode ? mode : '—';
+  switch (mode) {
+    case 'idle': return m.core_mode_idle();
+    case 'running': return m.core_mode_running();
+    case 'paused': return m.core_mode_paused();
+    case 'alarm': return m.core_mode_alarm();
+    case 'programming': return m.core_mode_programming();
+    case 'manual': return m.core_mode_manual();
+    default: return mode ? mode : '—';
+  }
 }
 
 /** @typedef {{ mode: string, source: string | null, at: number }} KnownMode */

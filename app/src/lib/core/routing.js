@@ -4,6 +4,8 @@
  * Every function takes the list as its last argument (default: the app's), so tests can add features.
  */
 import { features as appFeatures } from '../features/index.js';
+import { m } from '$lib/paraglide/messages.js';
+import { cellText } from './i18n.js';
 
 /** @typedef {import('../features/index.js').FeatureEntry} FeatureEntry */
 
@@ -26,7 +28,7 @@ export function featureByPath(pathname, list = appFeatures) {
 /**
  * Menu entries: the pages the server allows, in the server's order, limited to the features this
  * build has. The server's title wins (it comes from the cell file).
- * @param {{ id: string, title?: string }[] | undefined} allowed
+ * @param {{ id: string, title?: unknown }[] | undefined} allowed
  * @param {FeatureEntry[]} [list]
  * @returns {FeatureEntry[]}
  */
@@ -36,7 +38,7 @@ export function menuPages(allowed, list = appFeatures) {
   const out = [];
   for (const a of allowed) {
     const entry = list.find((k) => k.id === a?.id);
-    if (entry && !out.some((o) => o.id === entry.id)) out.push({ ...entry, title: a.title || entry.title });
+    if (entry && !out.some((o) => o.id === entry.id)) out.push({ ...entry, title: cellTitle(a.title, entry) });
   }
   return out;
 }
@@ -66,13 +68,23 @@ export function routeAccess(pathname, allowed, list = appFeatures) {
 /**
  * The page title: the cell file's title for the feature when the role sees it, else the list's.
  * @param {ReturnType<typeof routeAccess>} access
- * @param {{ id: string, title?: string }[] | undefined} allowed
+ * @param {{ id: string, title?: unknown }[] | undefined} allowed
  */
 export function pageTitle(access, allowed) {
-  if (access.kind === 'not-found') return 'Not found';
-  if (access.kind === 'denied') return 'Access denied';
+  if (access.kind === 'not-found') return m.nav_not_found();
+  if (access.kind === 'denied') return m.nav_access_denied();
   const id = access.entry.id;
-  return (Array.isArray(allowed) && allowed.find((a) => a?.id === id)?.title) || access.entry.title;
+  return cellTitle(Array.isArray(allowed) ? allowed.find((a) => a?.id === id)?.title : undefined, access.entry);
+}
+
+/**
+ * A page's title from the cell file (a string, or one per language) in the user's language. A plain title equal to
+ * the feature's English default is the default: the app's translation of it is shown.
+ * @param {unknown} fromCell @param {FeatureEntry} entry
+ */
+export function cellTitle(fromCell, entry) {
+  if (!fromCell || (typeof fromCell === 'string' && fromCell === entry.title_en)) return entry.title;
+  return cellText(fromCell) || entry.title;
 }
 
 /**

@@ -5,12 +5,14 @@
  * so an offline reload can still draw the shell; the server enforces every permission.
  */
 import { api as defaultApi } from './api.js';
+import { adoptAccountLocale, forgetLocale, switchLocale, isLocale } from './i18n.js';
+import { m } from '$lib/paraglide/messages.js';
 
 const CACHE_KEY = 'cell-ui.session.v1';
 // Set when logout could not reach the server: the cookie is still valid, so finish it later.
 const PENDING_LOGOUT_KEY = 'cell-ui.logout-pending';
 
-/** @typedef {{ username: string, role: string }} User */
+/** @typedef {{ username: string, role: string, locale?: string }} User  locale: the language kept with the account */
 /** @typedef {{ id: string, title: string }} ConfigPage */
 /**
  * GET /api/config: the cell file as this role needs it. The last four fields are newer: code must
@@ -42,10 +44,13 @@ export class Session {
    * @param {object} [deps]
    * @param {typeof defaultApi} [deps.api]
    * @param {Storage | null} [deps.storage]
+   * @param {{ adopt: (locale: unknown) => boolean, forget: () => void, switchTo: (locale: any) => void }} [deps.locale]
+   *   applying the account's language (the page reloads in it)
    */
   constructor(deps = {}) {
     this.api = deps.api ?? defaultApi;
     this.storage = deps.storage !== undefined ? deps.storage : safeLocalStorage();
+    this.locale = deps.locale ?? { adopt: adoptAccountLocale, forget: forgetLocale, switchTo: switchLocale };
   }
 
   /**
@@ -74,6 +79,8 @@ export class Session {
     if (cfg.kind === 'ok') this.config = cfg.data;
     this.auth = 'authenticated';
     this.#save();
+    // The language chosen on any device follows the account here.
+    this.locale.adopt(me.data?.locale);
     return this.auth;
   }
 
@@ -85,14 +92,11 @@ export class Session {
     const r = await this.api.login(username, password);
     if (r.kind === 'offline') {
       this.offline = true;
-      return { ok: false, error: 'Offline: cannot reach the server.' };
+      return { ok: false, error: m.errors_offline() };
     }
     this.offline = false;
-    if (r.kind === 'unauthorized') return { ok: false, error: r.error || 'Wrong user name or password.' };
-    if (r.kind === 'error' && r.status === 429) {
-      return { ok: false, error: r.error || 'Too many attempts. Wait a moment and try again.' };
-    }
-    if (r.kind !== 'ok') return { ok: false, error: r.error || 'Login failed.' };
+    if (r.kind === 'unauthorized') return { ok: false, error: r.error || m.errors_auth_invalid_credentials() };
+    if (r.kind !== 'ok') return { ok: false, error: r.error || m.errors_login_failed() };
     this.user = r.data;
     this.auth = 'authenticated';
     // Pull the role's config right away so the menu is complete on the first screen.
@@ -100,9 +104,30 @@ export class Session {
     return { ok: true };
   }
 
+  /**
+   * Keep a language with the account (null: the browser's), then show the app in it.
+   * @param {string | null} locale
+   * @returns {Promise<{ ok: true } | { ok: false, error: string }>}
+   */
+  async setLanguage(locale) {
+    const r = await this.api.preferences({ locale });
+    if (r.kind === 'offline') return { ok: false, error: m.errors_offline() };
+    if (r.kind === 'unauthorized') {
+      this.expire();
+      return { ok: false, error: r.error };
+    }
+    if (r.kind !== 'ok') return { ok: false, error: r.error };
+    this.user = r.data;
+    this.#save();
+    this.locale.switchTo(isLocale(locale) ? locale : null);
+    return { ok: true };
+  }
+
   async logout() {
     // Even offline the local session is dropped; the server side is finished on the next refresh.
     const r = await this.api.logout();
+    // The login page follows the browser again, not this user's language.
+    this.locale.forget();
     this.#loggedOut();
     if (r.kind === 'offline') this.#set(PENDING_LOGOUT_KEY, '1');
   }

@@ -23,6 +23,14 @@ import inspectIcon from './inspect/icon.js';
 import plantIcon from './plant/icon.js';
 import systemIcon from './system/icon.js';
 import { alarmSignal } from './alarms/signal.svelte.js';
+import { m } from '$lib/paraglide/messages.js';
+
+/**
+ * A default page title in the user's language, and in English: a cell file that leaves a title at the English
+ * default gets the translation (routing.js, cellTitle).
+ * @param {(inputs?: {}, options?: { locale?: 'en' }) => string} msg
+ */
+const titled = (msg) => ({ title: msg(), title_en: msg({}, { locale: 'en' }) });
 
 /** SVG path data (24x24, stroked) or a small component taking `size`. @typedef {string | import('svelte').Component<{ size?: number }>} IconSpec */
 
@@ -37,7 +45,8 @@ import { alarmSignal } from './alarms/signal.svelte.js';
  * @typedef {object} FeatureEntry
  * @property {string} id
  * @property {string} path  the URL path ('/' for home)
- * @property {string} title  default title (the cell file's wins)
+ * @property {string} title  default title, in the user's language (the cell file's wins)
+ * @property {string} [title_en]  the default title in English
  * @property {IconSpec} icon
  * @property {() => Promise<{ default: import('svelte').Component<any> }>} load  lazy page import
  * @property {() => Promise<{ default: import('svelte').Component<{ path: string }> }>} [shell]  a part the shell
@@ -47,22 +56,22 @@ import { alarmSignal } from './alarms/signal.svelte.js';
 
 /** @type {FeatureEntry[]} */
 export const features = [
-  { id: 'home', path: '/', title: 'Home', icon: homeIcon, load: () => import('./home/Page.svelte') },
-  { id: 'modules', path: '/modules', title: 'Modules', icon: modulesIcon, load: () => import('./modules/Page.svelte') },
-  { id: 'process', path: '/process', title: 'Process', icon: processIcon, load: () => import('./process/Page.svelte') },
-  { id: 'manual', path: '/manual', title: 'Manual motion', icon: manualIcon, load: () => import('./manual/Page.svelte') },
-  { id: 'scene', path: '/scene', title: '3D view', icon: sceneIcon, load: () => import('./scene/Page.svelte') },
-  { id: 'sensors', path: '/sensors', title: 'Sensors', icon: sensorsIcon, load: () => import('./sensors/Page.svelte') },
-  { id: 'video', path: '/video', title: 'Cameras', icon: videoIcon, load: () => import('./video/Page.svelte') },
-  { id: 'parameters', path: '/parameters', title: 'Parameters', icon: parametersIcon, load: () => import('./parameters/Page.svelte') },
-  { id: 'routines', path: '/routines', title: 'Routines', icon: routinesIcon, load: () => import('./routines/Page.svelte') },
+  { id: 'home', path: '/', ...titled(m.nav_page_home), icon: homeIcon, load: () => import('./home/Page.svelte') },
+  { id: 'modules', path: '/modules', ...titled(m.nav_page_modules), icon: modulesIcon, load: () => import('./modules/Page.svelte') },
+  { id: 'process', path: '/process', ...titled(m.nav_page_process), icon: processIcon, load: () => import('./process/Page.svelte') },
+  { id: 'manual', path: '/manual', ...titled(m.nav_page_manual), icon: manualIcon, load: () => import('./manual/Page.svelte') },
+  { id: 'scene', path: '/scene', ...titled(m.nav_page_scene), icon: sceneIcon, load: () => import('./scene/Page.svelte') },
+  { id: 'sensors', path: '/sensors', ...titled(m.nav_page_sensors), icon: sensorsIcon, load: () => import('./sensors/Page.svelte') },
+  { id: 'video', path: '/video', ...titled(m.nav_page_video), icon: videoIcon, load: () => import('./video/Page.svelte') },
+  { id: 'parameters', path: '/parameters', ...titled(m.nav_page_parameters), icon: parametersIcon, load: () => import('./parameters/Page.svelte') },
+  { id: 'routines', path: '/routines', ...titled(m.nav_page_routines), icon: routinesIcon, load: () => import('./routines/Page.svelte') },
   {
-    id: 'alarms', path: '/alarms', title: 'Alarms', icon: alarmsIcon, load: () => import('./alarms/Page.svelte'),
+    id: 'alarms', path: '/alarms', ...titled(m.nav_page_alarms), icon: alarmsIcon, load: () => import('./alarms/Page.svelte'),
     shell: () => import('./alarms/Shell.svelte'), badge: () => alarmSignal.badge,
   },
-  { id: 'recorder', path: '/recorder', title: 'Recordings', icon: recorderIcon, load: () => import('./recorder/Page.svelte') },
-  { id: 'inspect', path: '/inspect', title: 'Inspect', icon: inspectIcon, load: () => import('./inspect/Page.svelte') },
-  { id: 'plant', path: '/plant', title: 'Plant', icon: plantIcon, load: () => import('./plant/Page.svelte') },
-  { id: 'database', path: '/database', title: 'Database', icon: databaseIcon, load: () => import('./database/Page.svelte') },
-  { id: 'system', path: '/system', title: 'System', icon: systemIcon, load: () => import('./system/Page.svelte') },
+  { id: 'recorder', path: '/recorder', ...titled(m.nav_page_recorder), icon: recorderIcon, load: () => import('./recorder/Page.svelte') },
+  { id: 'inspect', path: '/inspect', ...titled(m.nav_page_inspect), icon: inspectIcon, load: () => import('./inspect/Page.svelte') },
+  { id: 'plant', path: '/plant', ...titled(m.nav_page_plant), icon: plantIcon, load: () => import('./plant/Page.svelte') },
+  { id: 'database', path: '/database', ...titled(m.nav_page_database), icon: databaseIcon, load: () => import('./database/Page.svelte') },
+  { id: 'system', path: '/system', ...titled(m.nav_page_system), icon: systemIcon, load: () => import('./system/Page.svelte') },
 ];

@@ -8,6 +8,8 @@
  * names a JPEG CompressedImage topic at the width the viewer can show (wantedWidth), and /cell/video/status says
  * what is wrong with a stream (streamProblem).
  */
+import { m } from '$lib/paraglide/messages.js';
+import { cellText, fmtFixed, fmtNumber } from '../core/i18n.js';
 
 /**
  * The image MIME type from CompressedImage.format ("jpeg", "png", "rgb8; jpeg compressed bgr8", ...).
@@ -44,11 +46,11 @@ export function imageSrc(msg) {
 }
 
 /** @typedef {'compressed' | 'raw'} StreamType */
-/** @typedef {{ name: string, topic: string, type: StreamType }} CameraStream */
+/** @typedef {{ name: string, topic: string, type: StreamType }} CameraStream  name: in the user's language */
 
 /**
  * The streams a page may show: /api/config `features.video.streams`, each { name, topic, type }; anything without a
- * topic dropped. type 'raw' is a sensor_msgs/Image topic (asked of the video service); anything else 'compressed'
+ * topic dropped; a name may be one per language (cellText). type 'raw' is a sensor_msgs/Image topic (asked of the video service); anything else 'compressed'
  * (a CompressedImage topic, subscribed as it is).
  * @param {unknown} streams
  * @returns {CameraStream[]}
@@ -57,7 +59,7 @@ export function cameraStreams(streams) {
   if (!Array.isArray(streams)) return [];
   return streams
     .filter((s) => s && typeof s.topic === 'string' && s.topic)
-    .map((s) => ({ name: typeof s.name === 'string' && s.name ? s.name : s.topic, topic: s.topic, type: s.type === 'raw' ? 'raw' : 'compressed' }));
+    .map((s) => ({ name: cellText(s.name) || s.topic, topic: s.topic, type: s.type === 'raw' ? 'raw' : 'compressed' }));
 }
 
 // ---- raw streams: the video service encodes them to JPEG at the viewer's size ----
@@ -199,7 +201,7 @@ export function videoAnswer(res) {
   if (res?.ok && typeof res.topic === 'string' && res.topic) {
     return { ok: true, topic: res.topic, width: Number(res.width) || 0, height: Number(res.height) || 0 };
   }
-  const message = typeof res?.message === 'string' && res.message ? res.message : 'The video service gave no stream';
+  const message = typeof res?.message === 'string' && res.message ? res.message : m.shell_camera_no_stream();
   return { ok: false, message };
 }
 
@@ -222,7 +224,7 @@ export function streamProblem(msg, topic) {
   if (!topic || !Array.isArray(msg?.status)) return null;
   const st = msg.status.find((/** @type {any} */ s) => s?.hardware_id === topic);
   if (!st || diagLevel(st.level) < 1) return null;
-  return typeof st.message === 'string' && st.message ? st.message : diagLevel(st.level) >= 2 ? 'error' : 'warning';
+  return typeof st.message === 'string' && st.message ? st.message : diagLevel(st.level) >= 2 ? m.shell_camera_problem_error() : m.shell_camera_problem_warning();
 }
 
 // ---- the binary hot path: CBOR bytes -> Blob -> ImageBitmap -> canvas (no base64, no data: URLs) ----
@@ -345,13 +347,13 @@ export function staleAfterMs(fps, minMs = 1000, fallbackMs = 2000) {
   return fps > 0 ? Math.max(minMs, 3000 / fps) : fallbackMs;
 }
 
-/** "0.1 s", "4 s", "3 min", "2 h". @param {number} ms */
+/** "0.1 s", "4 s", "3 min", "2 h" (numbers in the user's locale). @param {number} ms */
 export function shortAge(ms) {
   if (!Number.isFinite(ms) || ms < 0) return '—';
-  if (ms < 10_000) return `${ms < 1000 ? (ms / 1000).toFixed(1) : Math.floor(ms / 1000)} s`;
-  if (ms < 60_000) return `${Math.floor(ms / 1000)} s`;
-  if (ms < 3_600_000) return `${Math.floor(ms / 60_000)} min`;
-  return `${Math.floor(ms / 3_600_000)} h`;
+  if (ms < 1000) return m.shell_camera_age_s({ n: fmtFixed(ms / 1000, 1) });
+  if (ms < 60_000) return m.shell_camera_age_s({ n: fmtNumber(Math.floor(ms / 1000)) });
+  if (ms < 3_600_000) return m.shell_camera_age_min({ n: fmtNumber(Math.floor(ms / 60_000)) });
+  return m.shell_camera_age_h({ n: fmtNumber(Math.floor(ms / 3_600_000)) });
 }
 
 /**
@@ -360,11 +362,13 @@ export function shortAge(ms) {
  * @returns {{ state: 'live' | 'stale' | 'waiting' | 'hidden', tone: string, label: string, detail: string }}
  */
 export function frameStatus({ at, now, fps, visible, name, staleMs }) {
-  if (!visible) return { state: 'hidden', tone: 'neutral', label: 'Paused', detail: 'Paused while the page is hidden' };
-  if (at === null) return { state: 'waiting', tone: 'neutral', label: 'Waiting', detail: `Waiting for ${name}…` };
+  if (!visible) return { state: 'hidden', tone: 'neutral', label: m.shell_camera_paused(), detail: m.shell_camera_paused_detail() };
+  if (at === null) return { state: 'waiting', tone: 'neutral', label: m.shell_camera_waiting(), detail: m.shell_camera_waiting_for({ name }) };
   const age = Math.max(0, now - at);
-  if (age > (staleMs ?? staleAfterMs(fps))) return { state: 'stale', tone: 'warn', label: `Stale: ${shortAge(age)}`, detail: `No frame from ${name} for ${shortAge(age)}` };
-  return { state: 'live', tone: 'ok', label: 'Live', detail: `${fps > 0 ? fps.toFixed(1) : '—'} fps · frame ${shortAge(age)} old` };
+  if (age > (staleMs ?? staleAfterMs(fps))) {
+    return { state: 'stale', tone: 'warn', label: m.shell_camera_stale({ age: shortAge(age) }), detail: m.shell_camera_no_frame({ name, age: shortAge(age) }) };
+  }
+  return { state: 'live', tone: 'ok', label: m.shell_camera_live(), detail: m.shell_camera_live_detail({ fps: fps > 0 ? fmtFixed(fps, 1) : '—', age: shortAge(age) }) };
 }
 
 // ---- zoom and pan: a scale and an offset (CSS px) of the picture inside its box ----

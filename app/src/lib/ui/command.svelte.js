@@ -3,6 +3,8 @@
  * A second press while pending is ignored (commands never pile up); "done" fades back to idle.
  */
 
+import { m } from '$lib/paraglide/messages.js';
+
 /** @typedef {'idle' | 'pending' | 'done' | 'failed'} CommandStatus */
 
 export class Command {
@@ -78,7 +80,7 @@ export class Command {
 export function errorMessage(e) {
   if (e instanceof Error) return e.message || e.name;
   if (typeof e === 'string' && e) return e;
-  return 'The command failed';
+  return m.shell_cmd_error();
 }
 
 /**
@@ -90,6 +92,6 @@ export function errorMessage(e) {
  */
 export function expectSuccess(values) {
   const v = /** @type {any} */ (values);
-  if (v && v.success === false) throw new Error(v.message || 'The robot refused the command');
+  if (v && v.success === false) throw new Error(v.message || m.shell_cmd_refused());
   return values;
 }

@@ -3,10 +3,20 @@
  * it: newest first, at most `max` lines, each level with a label (colour is never the only signal).
  */
 
+import { m } from '$lib/paraglide/messages.js';
+import { fmtDateTime } from '../core/i18n.js';
+
 /** @typedef {'info' | 'warning' | 'error'} LogLevel */
 /** @typedef {{ key: string, at: number | null, level: LogLevel, label: string, text: string }} LogLine */
 
-export const LEVEL_LABELS = Object.freeze({ info: 'Info', warning: 'Warning', error: 'Error' });
+/** A level's label in the user's language. @param {LogLevel} level */
+export function levelLabel(level) {
+  switch (level) {
+    case 'error': return m.shell_log_error();
+    case 'warning': return m.shell_log_warning();
+    default: return m.shell_log_info();
+  }
+}
 
 /** @param {any} t  a ROS time ({secs, nsecs} or {sec, nanosec}) @returns {number | null} ms since the epoch */
 export function rosTimeMs(t) {
@@ -35,14 +45,13 @@ export function logLines(msg, max = 200) {
     const e = entries[i];
     const level = levelOf(e?.level);
     const at = rosTimeMs(e?.stamp);
-    out.push({ key: `${i}:${at ?? ''}`, at, level, label: LEVEL_LABELS[level], text: String(e?.text ?? '') });
+    out.push({ key: `${i}:${at ?? ''}`, at, level, label: levelLabel(level), text: String(e?.text ?? '') });
   }
   return out;
 }
 
-/** @param {number | null} at @returns {string} HH:MM:SS local time */
+/** @param {number | null} at @returns {string} HH:MM:SS local time (24 h, in the user's locale: 10.32.05 in Finnish) */
 export function clockTime(at) {
   if (at === null) return '--:--:--';
-  const d = new Date(at);
-  return [d.getHours(), d.getMinutes(), d.getSeconds()].map((n) => String(n).padStart(2, '0')).join(':');
+  return fmtDateTime(at, { hour: '2-digit', minute: '2-digit', second: '2-digit', hourCycle: 'h23' });
 }

@@ -3,6 +3,9 @@
  * the period it is expected to be refreshed in.
  */
 
+import { m } from '$lib/paraglide/messages.js';
+import { fmtNumber } from '../core/i18n.js';
+
 /** @param {number | null | undefined} at @param {number} now */
 export function ageMs(at, now) {
   return typeof at === 'number' ? Math.max(0, now - at) : null;
@@ -20,15 +23,15 @@ export function isStale(at, periodMs, now) {
 
 /** "just now", "12 s ago", "3 min ago", "2 h ago", "4 d ago". @param {number | null} ms */
 export function formatAge(ms) {
-  if (ms === null || !Number.isFinite(ms)) return 'never';
+  if (ms === null || !Number.isFinite(ms)) return m.shell_age_never();
   const s = Math.floor(ms / 1000);
-  if (s < 2) return 'just now';
-  if (s < 60) return `${s} s ago`;
-  const m = Math.floor(s / 60);
-  if (m < 60) return `${m} min ago`;
-  const h = Math.floor(m / 60);
-  if (h < 48) return `${h} h ago`;
-  return `${Math.floor(h / 24)} d ago`;
+  if (s < 2) return m.shell_age_just_now();
+  if (s < 60) return m.shell_age_s_ago({ n: fmtNumber(s) });
+  const min = Math.floor(s / 60);
+  if (min < 60) return m.shell_age_min_ago({ n: fmtNumber(min) });
+  const h = Math.floor(min / 60);
+  if (h < 48) return m.shell_age_h_ago({ n: fmtNumber(h) });
+  return m.shell_age_d_ago({ n: fmtNumber(Math.floor(h / 24)) });
 }
 
 /**
@@ -38,9 +41,9 @@ export function formatAge(ms) {
  * @returns {{ stale: boolean, text: string }}
  */
 export function freshness({ at, periodMs, now, live }) {
-  if (live) return { stale: false, text: 'live' };
-  if (at === null || at === undefined) return { stale: true, text: 'no data' };
+  if (live) return { stale: false, text: m.shell_fresh_live() };
+  if (at === null || at === undefined) return { stale: true, text: m.shell_fresh_no_data() };
   const stale = live === false || isStale(at, periodMs, now);
   const age = formatAge(ageMs(at, now));
-  return { stale, text: stale ? `stale · ${age}` : `updated ${age}` };
+  return { stale, text: stale ? m.shell_fresh_stale({ age }) : m.shell_fresh_updated({ age }) };
 }

@@ -1,7 +1,7 @@
 import { describe, it, expect } from 'vitest';
 import {
   processView, controls, needsStartConfirmation, cycleText, fieldAt, formatValue, parseCycles, formatSeconds, startQuestion,
-  cycleTimeText,
+  cycleTimeText, operationText,
 } from '../../../src/lib/features/process/logic.js';
 
 const msg = (o = {}) => ({
@@ -106,3 +106,19 @@ describe('cycle times with and without pauses', () => {
   });
 });
 
+
+describe('operationText', () => {
+  it("shows an operation's title from the cell file in the user's language, else its name", async () => {
+    const { setLocale } = await import('../../../src/lib/paraglide/runtime.js');
+    const titles = { 'pick part': { en: 'Pick part', es: 'Recoger pieza' } };
+    expect(operationText('pick part', titles)).toBe('Pick part');
+    expect(operationText('return home', titles)).toBe('return home');
+    expect(operationText('toString', titles)).toBe('toString');
+    setLocale('es', { reload: false });
+    try {
+      expect(operationText('pick part', titles)).toBe('Recoger pieza');
+    } finally {
+      setLocale('en', { reload: false });
+    }
+  });
+});

@@ -6,7 +6,10 @@ import path from 'node:path';
 import { removeStaleTemps, writeFileAtomic } from './atomic-file.js';
 import { hashPassword, verifyPassword, DUMMY_HASH, randomPassword } from './passwords.js';
 
-/** @typedef {{username: string, role: string, hash: string}} UserRecord */
+/** @typedef {{username: string, role: string, hash: string, locale?: string}} UserRecord */
+
+/** The app's languages (app/project.inlang/settings.json; a test keeps the two lists equal). */
+export const LOCALES = ['en', 'es', 'fi', 'de'];
 
 export const USERNAME_RE = /^[a-z][a-z0-9_.-]{1,31}$/;
 
@@ -92,15 +95,42 @@ export class UserStore {
 
   /**
    * @param {string} username @param {string} password
-   * @returns {Promise<{username: string, role: string} | null>}
+   * @returns {Promise<{username: string, role: string, locale?: string} | null>}
    */
   async authenticate(username, password) {
     const u = typeof username === 'string' ? this.get(username) : null;
     // Verify against a dummy hash for unknown users so both paths take the same time.
     const ok = await verifyPassword(String(password ?? ''), u ? u.hash : DUMMY_HASH);
-    return u && ok ? { username: u.username, role: u.role } : null;
+    return u && ok ? publicUser(u) : null;
+  }
+
+  /**
+   * The user as the app sees it (no hash).
+   * @param {string} username @returns {{username: string, role: string, locale?: string} | null}
+   */
+  profile(username) {
+    const u = this.get(username);
+    return u ? publicUser(u) : null;
+  }
+
+  /**
+   * Keep the user's language with the account (null: follow the browser). Written before it returns.
+   * @param {string} username @param {string | null} locale
+   */
+  setLocale(username, locale) {
+    if (locale !== null && !LOCALES.includes(locale)) throw new UsersError(`unknown language "${locale}" (one of ${LOCALES.join(', ')})`);
+    this.refresh();
+    const u = this.users.find((x) => x.username === username);
+    if (!u) throw new UsersError(`no user "${username}"`);
+    if (locale === null) delete u.locale;
+    else u.locale = locale;
+    this.save();
+    return publicUser(u);
   }
 }
+
+/** @param {UserRecord} u */
+const publicUser = (u) => ({ username: u.username, role: u.role, ...(u.locale && LOCALES.includes(u.locale) ? { locale: u.locale } : {}) });
 
 /** @param {string} password */
 function checkPassword(password) {

@@ -1,12 +1,16 @@
 // The HTTP API as an OpenAPI 3.1 document (the core's paths plus each feature's), and request validation from it (ajv).
 import Ajv2020Module from 'ajv/dist/2020.js';
+import { LOCALES } from '../auth/users.js';
+import { errorBody } from './errors.js';
 
 // ajv is CommonJS: under Node its default import is the class itself.
 const Ajv2020 = /** @type {typeof Ajv2020Module.default} */ (/** @type {unknown} */ (Ajv2020Module));
 
 const json = (schema) => ({ content: { 'application/json': { schema } } });
-const error = { type: 'object', required: ['error'], properties: { error: { type: 'string' } } };
-const user = { type: 'object', required: ['username', 'role'], properties: { username: { type: 'string' }, role: { type: 'string' } } };
+// code and params: a stable error code and its values, for the app to say in the user's language.
+const error = { type: 'object', required: ['error'], properties: { error: { type: 'string' }, code: { type: 'string' }, params: { type: 'object' } } };
+// locale: the language the user chose (absent: the browser's).
+const user = { type: 'object', required: ['username', 'role'], properties: { username: { type: 'string' }, role: { type: 'string' }, locale: { type: 'string' } } };
 const health = {
   type: 'object', required: ['status', 'ros'],
   properties: {
@@ -16,7 +20,7 @@ const health = {
 };
 const lease = { type: 'object', required: ['holder', 'you'], properties: { holder: { type: ['object', 'null'] }, you: { type: 'boolean' } } };
 // holder.resumed_at: the BFF restarted and gave the lease back to its holder. ended: why this session lost control.
-const leaseRefused = { type: 'object', required: ['error'], properties: { error: { type: 'string' }, holder: { type: ['object', 'null'] }, ended: { type: 'string' } } };
+const leaseRefused = { type: 'object', required: ['error'], properties: { error: { type: 'string' }, code: { type: 'string' }, params: { type: 'object' }, holder: { type: ['object', 'null'] }, ended: { type: 'string' } } };
 const unauthorized = { description: 'Not logged in', ...json(error) };
 
 /** The core's part of the document; buildOpenApi adds the features'. */
@@ -53,6 +57,16 @@ const core = {
     },
     '/api/auth/me': {
       get: { summary: 'Who is logged in', security: [{ session: [] }], responses: { 200: { description: 'The user', ...json(user) }, 401: unauthorized } },
+    },
+    '/api/auth/me/preferences': {
+      put: {
+        summary: "Keep the user's language with the account (null: follow the browser)", security: [{ session: [] }],
+        requestBody: { required: true, ...json({
+          type: 'object', additionalProperties: false, required: ['locale'],
+          properties: { locale: { oneOf: [{ enum: LOCALES }, { type: 'null' }] } },
+        }) },
+        responses: { 200: { description: 'The user', ...json(user) }, 400: { description: 'Not a language of the app', ...json(error) }, 401: unauthorized, 409: { description: 'The account was removed', ...json(error) } },
+      },
     },
     '/api/config': {
       get: { summary: "The cell file as the caller's role needs it", security: [{ session: [] }], responses: { 200: { description: 'Filtered cell file', ...json({ type: 'object' }) }, 401: unauthorized } },
@@ -200,7 +214,7 @@ export function validateRequests(openapi, { include = () => true, audit } = {}) 
       const s = /** @type {any} */ (req).session;
       audit?.record({ user: s?.username ?? null, role: s?.role ?? null, ip: req.ip || null, op: 'request.invalid',
         target: `${req.method} ${found.path}`, outcome: 'denied', detail: `${status}: ${error}` });
-      return res.status(status).json({ error });
+      return res.status(status).json(errorBody(error, status === 415 ? 'request.not_json' : 'request.invalid', { detail: error }));
     };
     if (!req.is('application/json')) return refuse(415, 'expected application/json');
     if (!validate(req.body)) {

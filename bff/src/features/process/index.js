@@ -13,6 +13,8 @@ export default defineFeature({
   // The page needs the names (the node's state has them too, live) and the status panel; the steps stay on the PC.
   view: (section) => ({
     operations: (section.operations || []).map(operationName),
+    // What the page shows for an operation, by name (a text per language), where the cell file gives one.
+    titles: Object.fromEntries((section.operations || []).filter((o) => o?.title).map((o) => [o.name, o.title])),
     status_fields: section.status_fields || [],
     start_configuration: section.start_configuration ?? null,
   }),

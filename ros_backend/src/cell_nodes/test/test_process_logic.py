@@ -991,3 +991,16 @@ def test_client_refuses_a_malformed_memory_and_counts_from_1(change: dict, why: 
     c, _ = client()
     assert re.search(why, c.restore(memory))
     assert c.memory() == {"next_cycle": 1, "last_cycle_s": 0.0, "last_cycle_elapsed_s": 0.0}
+
+
+def test_texts_per_language_are_the_pages_the_node_keeps_the_english():
+    """An operation's title and a status field's label may be given per language (the page shows them); the node
+    takes the operation by its name and the label in English."""
+    cfg = parse_process(_with(
+        operations=[{"name": "op", "title": {"en": "Pick", "es": "Recoger"}, "steps": [{"move_named": "home"}]}],
+        status_fields=[{"label": {"en": "Cycles done", "fi": "Jaksoja tehty"}, "topic": "/cell/process/state", "field": "cycles_done"}],
+    ), MANUAL)
+    assert [o.name for o in cfg.operations] == ["op"]
+    assert cfg.status_fields[0].label == "Cycles done"
+    with pytest.raises(ConfigError, match=r"status_fields\[0\]\.label\.en"):
+        parse_process(_with(status_fields=[{"label": {"es": "Ciclos"}, "topic": "/t", "field": "f"}]), MANUAL)

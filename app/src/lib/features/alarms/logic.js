@@ -3,6 +3,9 @@
  * which alarm the banner shows. No Svelte, no ROS: tests import it directly.
  */
 
+import { m } from '$lib/paraglide/messages.js';
+import { getLocale } from '../../core/i18n.js';
+
 export const FEATURE_ID = 'alarms';
 
 export const NAMES = Object.freeze({
@@ -14,21 +17,24 @@ export const NAMES = Object.freeze({
 /** Both topics are latched and republished about once a second: older than this, they are stale. */
 export const STATUS_PERIOD_MS = 3000;
 
-/** Severity as colour and label (cell_msgs/Alarm: 0 info, 1 warning, 2 error). */
+/** Severity as colour and label (cell_msgs/Alarm: 0 info, 1 warning, 2 error); the label in the user's language. */
 export const SEVERITY = Object.freeze([
-  { tone: 'info', label: 'Info' },
-  { tone: 'warn', label: 'Warning' },
-  { tone: 'danger', label: 'Error' },
+  Object.freeze({ tone: 'info', get label() { return m.alarms_severity_info(); } }),
+  Object.freeze({ tone: 'warn', get label() { return m.alarms_severity_warning(); } }),
+  Object.freeze({ tone: 'danger', get label() { return m.alarms_severity_error(); } }),
 ]);
 
-/** @param {number} s */
-export const severityView = (s) => SEVERITY[Math.max(0, Math.min(SEVERITY.length - 1, Math.trunc(Number(s) || 0)))];
+/** @param {number} s @returns {{ tone: string, label: string }} */
+export const severityView = (s) => {
+  const v = SEVERITY[Math.max(0, Math.min(SEVERITY.length - 1, Math.trunc(Number(s) || 0)))];
+  return { tone: v.tone, label: v.label };
+};
 
 /**
  * @typedef {object} AlarmView
  * @property {string} key  id + the how-many-th activation: a new key is a new alarm for the banner
  * @property {string} id
- * @property {string} text
+ * @property {string | Record<string, string>} text  the cell file's (one per language, maybe): shown through cellText
  * @property {number} severity
  * @property {boolean} active
  * @property {number | null} since  ms since the epoch (first seen)
@@ -60,7 +66,7 @@ export function alarmViews(msg) {
       return {
         key: `${a.id}#${count}@${since ?? 0}`,
         id: a.id,
-        text: typeof a.text === 'string' && a.text ? a.text : a.id,
+        text: (typeof a.text === 'string' && a.text) || (a.text && typeof a.text === 'object') ? a.text : a.id,
         severity: Number(a.severity) || 0,
         active: !!a.active,
         since,
@@ -73,13 +79,33 @@ export function alarmViews(msg) {
       Number(b.active) - Number(a.active) || b.severity - a.severity || (b.since ?? 0) - (a.since ?? 0));
 }
 
+/**
+ * The overall status's name in the user's language (cell_msgs/SafetyStatus: normal, warning, fault, safeguard stop,
+ * protective stop, emergency stop); another one as the robot PC sent it, capitalised.
+ * @param {string} s
+ */
+function statusLabel(s) {
+  switch (s) {
+    case 'normal': return m.alarms_status_normal();
+    case 'warning': return m.alarms_status_warning();
+    case 'fault': return m.alarms_status_fault();
+    case 'safeguard stop': return m.alarms_status_safeguard_stop();
+    case 'protective stop': return m.alarms_status_protective_stop();
+    case 'emergency stop': return m.alarms_status_emergency_stop();
+    default: return s.charAt(0).toUpperCase() + s.slice(1);
+  }
+}
+
 /** The overall safety status's look: colour and label. @param {any} status cell_msgs/SafetyStatus */
 export function statusView(status) {
   const s = typeof status?.status === 'string' && status.status ? status.status : '';
-  if (!s) return { tone: 'neutral', label: 'Unknown' };
+  if (!s) return { tone: 'neutral', label: m.alarms_status_unknown() };
   const tone = s === 'normal' ? 'ok' : s === 'warning' ? 'warn' : 'danger';
-  return { tone, label: s.charAt(0).toUpperCase() + s.slice(1) };
+  return { tone, label: statusLabel(s) };
 }
+
+/** The robot PC's words for "nothing active" (SafetyStatus.text); any other text is an alarm's, from the cell file. */
+export const NO_ACTIVE_ALARM = 'no active alarm';
 
 /**
  * The alarm the banner shows: the newest active one not yet dismissed (dismissing hides the ones shown then; an
@@ -96,11 +122,14 @@ export function bannerAlarm(alarms, dismissed) {
 /** How many alarms are active (the menu badge). @param {AlarmView[]} alarms */
 export const activeCount = (alarms) => alarms.filter((a) => a.active).length;
 
-/** "14:03:21" today, else "21 Nov 14:03". @param {number | null} ms @param {number} [now] */
+/** The locale dates are written in: the user's; English as in Britain (day before month, 24-hour clock). */
+const dateLocale = () => (getLocale() === 'en' ? 'en-GB' : getLocale());
+
+/** "14:03:21" today, else "21 Nov 14:03" (in English; the user's locale's format). @param {number | null} ms @param {number} [now] */
 export function formatTime(ms, now = Date.now()) {
   if (ms === null) return '—';
   const d = new Date(ms);
-  const time = d.toLocaleTimeString('en-GB', { hour: '2-digit', minute: '2-digit', second: '2-digit' });
-  if (new Date(now).toDateString() === d.toDateString()) return time;
-  return `${d.toLocaleDateString('en-GB', { day: 'numeric', month: 'short' })} ${time.slice(0, 5)}`;
+  const loc = dateLocale();
+  if (new Date(now).toDateString() === d.toDateString()) return d.toLocaleTimeString(loc, { hour: '2-digit', minute: '2-digit', second: '2-digit' });
+  return `${d.toLocaleDateString(loc, { day: 'numeric', month: 'short' })} ${d.toLocaleTimeString(loc, { hour: '2-digit', minute: '2-digit' })}`;
 }

@@ -3,6 +3,7 @@
  * (the shell's, through the feature list's `shell` entry), read by the menu badge, the banner, the Alarms page
  * and Home. Both topics are latched: the values are current exactly while the link is up.
  */
+import { m } from '$lib/paraglide/messages.js';
 import { NAMES, alarmViews, activeCount, bannerAlarm } from './logic.js';
 
 export class AlarmSignal {
@@ -30,7 +31,7 @@ export class AlarmSignal {
   /** The menu badge: the count of active alarms, or null when none (or nothing known). */
   get badge() {
     const n = this.active;
-    return this.live && n > 0 ? { count: n, label: `${n} active alarm${n === 1 ? '' : 's'}` } : null;
+    return this.live && n > 0 ? { count: n, label: m.alarms_n_active({ count: n }) } : null;
   }
 
   get banner() {

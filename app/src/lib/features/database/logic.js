@@ -2,14 +2,17 @@
  * The database feature's plain logic (no Svelte): the API calls (JSON through core/api.js, uploads through
  * XMLHttpRequest for their progress), the replace/restore flow as a small state machine, and the texts the page
  * shows (confirmations name both files). The BFF does every check (listed targets, same extension, content,
- * size, paths); the page shows its answers as they come.
+ * size, paths); the page shows its answers as they come. The texts come from messages/database; sizes, dates and
+ * percentages are in the user's locale.
  *
  * API (bff/src/features/database/routes.js): GET /api/database/files, GET /api/database/drives,
  * GET /api/database/drives/:drive/files?path=, POST /api/database/files/:name/from-drive {drive, path},
  * POST /api/database/files/:name/upload (multipart, field "file"), GET /api/database/files/:name/backups,
  * POST /api/database/files/:name/restore {backup}.
  */
+import { m } from '$lib/paraglide/messages.js';
 import { request } from '../../core/api.js';
+import { fmtNumber, fmtFixed, fmtDateTime, getLocale } from '../../core/i18n.js';
 
 export const FEATURE_ID = 'database';
 
@@ -73,8 +76,8 @@ export function uploadFile(url, file, o = {}) {
       resolve({ kind: 'error', status, error, data });
     };
     // The server may answer a refusal and close before the body is sent (e.g. 413): that is an error event.
-    xhr.onerror = () => resolve({ kind: 'offline', error: 'the upload did not reach the server (connection lost)' });
-    xhr.onabort = () => resolve({ kind: 'offline', error: 'the upload was cancelled' });
+    xhr.onerror = () => resolve({ kind: 'offline', error: m.database_upload_lost() });
+    xhr.onabort = () => resolve({ kind: 'offline', error: m.database_upload_cancelled() });
     xhr.send(form);
   });
 }
@@ -120,7 +123,7 @@ export function step(s, e) {
       return { phase: 'done', kind: s.kind, target: s.target, source: s.source, backup: e.result?.backup ?? null, message: doneText(s.kind, s.target, s.source, e.result) };
     case 'fail':
       if (s.phase !== 'running') return s;
-      return { phase: 'failed', kind: s.kind, target: s.target, source: s.source, error: e.error || 'the server refused' };
+      return { phase: 'failed', kind: s.kind, target: s.target, source: s.source, error: e.error || m.database_server_refused() };
     case 'reset':
       return s.phase === 'running' ? s : IDLE;
     default:
@@ -130,7 +133,7 @@ export function step(s, e) {
 
 /** @param {'replace' | 'restore'} kind @param {string} target @param {string} source */
 export function question(kind, target, source) {
-  return kind === 'replace' ? `Replace ${target} with ${source}?` : `Restore ${target} from the backup ${source}?`;
+  return kind === 'replace' ? m.database_ask_replace({ target, source }) : m.database_ask_restore({ target, source });
 }
 
 /**
@@ -139,19 +142,21 @@ export function question(kind, target, source) {
  * @param {string} target @param {boolean} exists
  */
 export function confirmNote(target, exists) {
-  return exists
-    ? `The current ${target} is kept as a backup, which can be restored.`
-    : `There is no ${target} on the robot PC yet, so there is nothing to back up.`;
+  return exists ? m.database_note_backup({ target }) : m.database_note_no_backup({ target });
 }
 
 /** @param {'replace' | 'restore'} kind @param {string} target @param {string} source @param {Replaced | undefined} r */
 export function doneText(kind, target, source, r) {
-  const kept = r?.backup ? ` The file it replaced was kept as the backup ${r.backup}.` : ' There was no earlier file to back up.';
-  return kind === 'replace' ? `${target} replaced with ${source}.${kept}` : `${target} restored from ${source}.${kept}`;
+  const backup = r?.backup;
+  if (kind === 'replace') {
+    return backup ? m.database_replaced_backup({ target, source, backup }) : m.database_replaced_no_backup({ target, source });
+  }
+  return backup ? m.database_restored_backup({ target, source, backup }) : m.database_restored_no_backup({ target, source });
 }
 
 /** @param {'replace' | 'restore'} kind @param {string} target @param {string} error */
-export const failText = (kind, target, error) => `${kind === 'replace' ? 'Could not replace' : 'Could not restore'} ${target}: ${error}`;
+export const failText = (kind, target, error) =>
+  kind === 'replace' ? m.database_replace_failed({ target, error }) : m.database_restore_failed({ target, error });
 
 // ---- names, paths and texts ----
 
@@ -179,7 +184,10 @@ export function defaultTarget(fileName, targets) {
 export function extensionWarning(fileName, target) {
   if (!fileName || !target) return '';
   const a = extOf(fileName), b = extOf(target);
-  return a === b ? '' : `${target} takes only ${b || 'extension-less'} files; ${fileName} is ${a || 'without extension'}.`;
+  if (a === b) return '';
+  if (!b) return m.database_ext_target_none({ target, file: fileName, fileExt: a });
+  if (!a) return m.database_ext_file_none({ target, ext: b, file: fileName });
+  return m.database_ext_mismatch({ target, ext: b, file: fileName, fileExt: a });
 }
 
 /** The accept attribute of the file picker: the targets' extensions. @param {string[]} targets */
@@ -205,17 +213,22 @@ export const childPath = (dir, name) => (dir ? `${dir.replace(/\/+$/, '')}/${nam
 /** "1.2 KB", "3.4 MB", "512 B". @param {number | null | undefined} n */
 export function formatBytes(n) {
   if (typeof n !== 'number' || !Number.isFinite(n) || n < 0) return '—';
-  if (n < 1024) return `${n} B`;
-  if (n < 1024 * 1024) return `${(n / 1024).toFixed(1)} KB`;
-  return `${(n / 1024 / 1024).toFixed(1)} MB`;
+  if (n < 1024) return `${fmtNumber(n)} B`;
+  if (n < 1024 * 1024) return `${fmtFixed(n / 1024, 1)} KB`;
+  return `${fmtFixed(n / 1024 / 1024, 1)} MB`;
 }
 
-/** "22 Nov 2026, 14:03:21" (local time). @param {string | number | null | undefined} t */
+/** @type {Intl.DateTimeFormatOptions} */
+const DATE_OPTS = { day: 'numeric', month: 'short', year: 'numeric', hour: '2-digit', minute: '2-digit', second: '2-digit', hourCycle: 'h23' };
+/** English keeps its day-month-year, 24-hour form; the other languages get their own. */
+const EN_DATE = new Intl.DateTimeFormat('en-GB', DATE_OPTS);
+
+/** "22 Nov 2026, 14:03:21" (local time, in the user's locale: "22. Nov. 2026, 14:03:21" in German). @param {string | number | null | undefined} t */
 export function formatDate(t) {
   if (t === null || t === undefined || t === '') return '—';
   const d = new Date(t);
   if (Number.isNaN(d.getTime())) return '—';
-  return `${d.toLocaleDateString('en-GB', { day: 'numeric', month: 'short', year: 'numeric' })}, ${d.toLocaleTimeString('en-GB', { hour: '2-digit', minute: '2-digit', second: '2-digit' })}`;
+  return getLocale() === 'en' ? EN_DATE.format(d) : fmtDateTime(d, DATE_OPTS);
 }
 
 /** When a backup was made, from its name ("parts.csv.2026-11-22T10:10:10.000Z-1"), else null. @param {string} target @param {string} name */
@@ -227,4 +240,4 @@ export function backupTime(target, name) {
 }
 
 /** "45 %" for a fraction, '' when unknown. @param {number | null} f */
-export const percent = (f) => (typeof f === 'number' && Number.isFinite(f) ? `${Math.round(f * 100)} %` : '');
+export const percent = (f) => (typeof f === 'number' && Number.isFinite(f) ? `${fmtNumber(Math.round(f * 100))} %` : '');

@@ -14,6 +14,9 @@
  * any topic's last message).
  */
 
+import { m } from '$lib/paraglide/messages.js';
+import { fmtFixed, fmtDateTime } from '../../core/i18n.js';
+
 export const FEATURE_ID = 'inspect';
 
 export const NAMES = Object.freeze({
@@ -47,16 +50,19 @@ export const DEFAULT_KEEP_S = 600;
 
 /** @typedef {'debug' | 'info' | 'warn' | 'error' | 'fatal'} LevelName */
 /** @typedef {'neutral' | 'info' | 'warn' | 'danger' | 'fatal'} LevelTone */
-/** @typedef {{ name: LevelName, value: number, label: string, upper: string, tone: LevelTone }} Level */
+/**
+ * @typedef {{ name: LevelName, value: number, label: string, upper: string, badge: string, tone: LevelTone }} Level
+ * label: the filter's name, badge: the row's (both in the user's language); upper: ROS's name (the export's).
+ */
 
-/** rosgraph_msgs/Log's levels (RosLogEntry's too), lowest first. Colour (tone) and text (upper) always together. */
+/** rosgraph_msgs/Log's levels (RosLogEntry's too), lowest first. Colour (tone) and text (badge) always together. */
 export const LEVELS = /** @type {readonly Level[]} */ (Object.freeze([
-  { name: 'debug', value: 1, label: 'Debug', upper: 'DEBUG', tone: 'neutral' },
-  { name: 'info', value: 2, label: 'Info', upper: 'INFO', tone: 'info' },
-  { name: 'warn', value: 4, label: 'Warn', upper: 'WARN', tone: 'warn' },
-  { name: 'error', value: 8, label: 'Error', upper: 'ERROR', tone: 'danger' },
-  { name: 'fatal', value: 16, label: 'Fatal', upper: 'FATAL', tone: 'fatal' },
-]));
+  { name: 'debug', value: 1, get label() { return m.inspect_level_debug(); }, upper: 'DEBUG', get badge() { return m.inspect_level_debug_badge(); }, tone: 'neutral' },
+  { name: 'info', value: 2, get label() { return m.inspect_level_info(); }, upper: 'INFO', get badge() { return m.inspect_level_info_badge(); }, tone: 'info' },
+  { name: 'warn', value: 4, get label() { return m.inspect_level_warn(); }, upper: 'WARN', get badge() { return m.inspect_level_warn_badge(); }, tone: 'warn' },
+  { name: 'error', value: 8, get label() { return m.inspect_level_error(); }, upper: 'ERROR', get badge() { return m.inspect_level_error_badge(); }, tone: 'danger' },
+  { name: 'fatal', value: 16, get label() { return m.inspect_level_fatal(); }, upper: 'FATAL', get badge() { return m.inspect_level_fatal_badge(); }, tone: 'fatal' },
+].map((l) => Object.freeze(l))));
 
 const BY_NAME = new Map(LEVELS.map((l) => [l.name, l]));
 
@@ -122,22 +128,22 @@ export function rosTimeUs(t) {
  * One entry in the page's shape, from the service's RosLogEntry ({stamp, level, node, msg, file, function, line})
  * or the topic's rosgraph_msgs/Log ({header: {stamp}, level, name, msg, file, function, line, topics}).
  * An entry without a stamp gets `fallbackMs` (when it arrived).
- * @param {any} m @param {number} [fallbackMs] @returns {LogEntry}
+ * @param {any} e @param {number} [fallbackMs] @returns {LogEntry}
  */
-export function normaliseEntry(m, fallbackMs = Date.now()) {
-  const us = rosTimeUs(m?.stamp ?? m?.header?.stamp) ?? Math.round(fallbackMs * 1000);
-  const name = levelName(m?.level);
-  const node = str(m?.node ?? m?.name);
-  const msg = str(m?.msg);
-  const line = Math.max(0, Math.trunc(Number(m?.line) || 0));
+export function normaliseEntry(e, fallbackMs = Date.now()) {
+  const us = rosTimeUs(e?.stamp ?? e?.header?.stamp) ?? Math.round(fallbackMs * 1000);
+  const name = levelName(e?.level);
+  const node = str(e?.node ?? e?.name);
+  const msg = str(e?.msg);
+  const line = Math.max(0, Math.trunc(Number(e?.line) || 0));
   return {
     t_ms: us / 1000,
     level: levelView(name).value,
     levelName: name,
     node,
     msg,
-    file: str(m?.file),
-    function: str(m?.function),
+    file: str(e?.file),
+    function: str(e?.function),
     line,
     key: `${us}|${node}|${line}|${msg.slice(0, KEY_MSG_CHARS)}`,
   };
@@ -232,14 +238,13 @@ export function nodeList(entries, keep = '') {
 
 // ---- texts ----
 
-/** @param {number} n */
-const two = (n) => String(n).padStart(2, '0');
+/** The time of day to the ms, 24-hour, in the user's locale. */
+const CLOCK = /** @type {Intl.DateTimeFormatOptions} */ ({ hour: '2-digit', minute: '2-digit', second: '2-digit', fractionalSecondDigits: 3, hourCycle: 'h23' });
 
-/** "14:05:12.123", local time. @param {number} tMs */
+/** "14:05:12.123" (in English), local time. @param {number} tMs */
 export function formatClock(tMs) {
   if (typeof tMs !== 'number' || !Number.isFinite(tMs)) return '--:--:--.---';
-  const d = new Date(Math.floor(tMs));
-  return `${two(d.getHours())}:${two(d.getMinutes())}:${two(d.getSeconds())}.${String(d.getMilliseconds()).padStart(3, '0')}`;
+  return fmtDateTime(Math.floor(tMs), CLOCK);
 }
 
 /** The ISO time of an entry (UTC, ms): "2026-11-26T14:05:12.123Z". @param {number} tMs */
@@ -248,17 +253,17 @@ export const isoTime = (tMs) => new Date(Math.floor(tMs)).toISOString();
 /** Where it was logged: "process.py:120", '' when the node did not say. @param {LogEntry} e */
 export const sourceText = (e) => (e.file ? (e.line > 0 ? `${e.file}:${e.line}` : e.file) : '');
 
-/** @param {number} n @param {string} one @param {string} [many] */
-const count = (n, one, many = `${one}s`) => `${n} ${n === 1 ? one : many}`;
+/** A whole number in the user's locale, without grouping ("5000", as the counts always read). @param {number} n */
+const int = (n) => fmtFixed(n, 0);
 
-/** "45 s", "10 min", "2 h 5 min". @param {number} s */
+/** "45 s", "10 min", "2 h 5 min" (unit symbols; the numbers in the user's locale). @param {number} s */
 export function spanText(s) {
   const v = Math.max(0, Number(s) || 0);
-  if (v < 60) return `${Math.round(v)} s`;
+  if (v < 60) return `${int(Math.round(v))} s`;
   const min = Math.round(v / 60);
-  if (min < 120) return `${min} min`;
-  const h = Math.floor(min / 60), m = min % 60;
-  return m ? `${h} h ${m} min` : `${h} h`;
+  if (min < 120) return `${int(min)} min`;
+  const h = Math.floor(min / 60), mm = min % 60;
+  return mm ? `${int(h)} h ${int(mm)} min` : `${int(h)} h`;
 }
 
 /**
@@ -271,7 +276,7 @@ export function keepText(section) {
   const s = Number(section?.log_keep_s);
   const entries = Number.isFinite(n) && n > 0 ? n : DEFAULT_KEEP_ENTRIES;
   const secs = Number.isFinite(s) && s > 0 ? s : DEFAULT_KEEP_S;
-  return `The robot PC keeps the last ${spanText(secs)} of the ROS log, at most ${count(entries, 'entry', 'entries')}; this page keeps the newest ${KEEP_ENTRIES}.`;
+  return m.inspect_keep({ span: spanText(secs), entries: m.inspect_n_entries({ count: entries }), keep: int(KEEP_ENTRIES) });
 }
 
 /**
@@ -292,9 +297,9 @@ export function historyText(a) {
   const loaded = Array.isArray(a.entries) ? a.entries.length : 0;
   const matched = Math.max(loaded, Number(a.matched) || 0);
   const dropped = Math.max(0, Number(a.dropped) || 0);
-  if (matched === 0) return `History: no entries kept on the robot PC yet (${dropped} dropped)`;
-  const text = `History: the last ${spanText(a.kept_s)} (${count(matched, 'entry', 'entries')} kept on the robot PC, ${dropped} dropped)`;
-  return loaded < matched ? `${text} · the newest ${loaded} loaded` : text;
+  if (matched === 0) return m.inspect_history_none({ dropped: int(dropped) });
+  const text = m.inspect_history({ span: spanText(a.kept_s), entries: m.inspect_n_entries({ count: matched }), dropped: int(dropped) });
+  return loaded < matched ? m.inspect_history_loaded({ history: text, loaded: int(loaded) }) : text;
 }
 
 /**
@@ -304,14 +309,15 @@ export function historyText(a) {
  */
 export function shownText(shown, matching, total) {
   if (total === 0) return '';
-  const from = matching < total ? ` (filtered from ${total})` : '';
-  if (matching === 0) return `No entries match the filters (${count(total, 'entry', 'entries')} kept)`;
-  if (shown < matching) return `Showing the newest ${shown} of ${matching} entries${from}`;
-  return `${count(matching, 'entry', 'entries')}${from}`;
+  /** @param {string} text */
+  const from = (text) => (matching < total ? m.inspect_log_filtered_from({ text, total: int(total) }) : text);
+  if (matching === 0) return m.inspect_log_none_match({ entries: m.inspect_n_entries({ count: total }) });
+  if (shown < matching) return from(m.inspect_log_showing({ shown: int(shown), matching: int(matching) }));
+  return from(m.inspect_n_entries({ count: matching }));
 }
 
 /** While paused: "12 new entries" (not shown until Resume). @param {number} n */
-export const newEntriesText = (n) => `${count(n, 'new entry', 'new entries')}`;
+export const newEntriesText = (n) => m.inspect_n_new_entries({ count: n });
 
 /**
  * Why the view is not live, as a title and a sentence (null when it is live): the log's, the graph's (Topics and
@@ -321,19 +327,15 @@ export const newEntriesText = (n) => `${count(n, 'new entry', 'new entries')}`;
  */
 export function notLiveView(why, what = 'log') {
   if (!why) return null;
-  const title = why === 'offline' ? 'Offline' : 'ROS disconnected';
+  const offline = why === 'offline';
+  const title = offline ? m.inspect_offline() : m.inspect_ros_disconnected();
   if (what === 'diagnostics') {
-    return { title, text: why === 'offline'
-      ? 'the diagnostics shown may be out of date. They update again once the server answers.'
-      : 'the diagnostics shown may be out of date. They update again once reconnected.' };
+    return { title, text: offline ? m.inspect_not_live_diag_offline() : m.inspect_not_live_diag_disconnected() };
   }
   if (what === 'graph') {
-    return { title, text: why === 'offline'
-      ? 'the topics and nodes shown may be out of date. They are read again once the server answers.'
-      : 'the topics and nodes shown may be out of date, and nothing is measured. They are read again once reconnected.' };
+    return { title, text: offline ? m.inspect_not_live_graph_offline() : m.inspect_not_live_graph_disconnected() };
   }
-  if (why === 'offline') return { title, text: 'the log is not live. New entries appear again once the server answers.' };
-  return { title, text: 'the log is not live. New entries appear again once reconnected, with the history missed meanwhile.' };
+  return { title, text: offline ? m.inspect_not_live_log_offline() : m.inspect_not_live_log_disconnected() };
 }
 
 // ---- export ----
@@ -366,13 +368,13 @@ export function exportFileName(nowMs) {
 
 /** @typedef {'log' | 'topics' | 'nodes' | 'diagnostics'} TabId */
 
-/** The page's views, in the tab list's order. */
+/** The page's views, in the tab list's order (label: in the user's language). */
 export const TABS = /** @type {readonly { id: TabId, label: string }[]} */ (Object.freeze([
-  { id: 'log', label: 'Log' },
-  { id: 'topics', label: 'Topics' },
-  { id: 'nodes', label: 'Nodes' },
-  { id: 'diagnostics', label: 'Diagnostics' },
-]));
+  { id: 'log', get label() { return m.inspect_log(); } },
+  { id: 'topics', get label() { return m.inspect_topics(); } },
+  { id: 'nodes', get label() { return m.inspect_nodes(); } },
+  { id: 'diagnostics', get label() { return m.inspect_diagnostics(); } },
+].map((t) => Object.freeze(t))));
 
 /** A view's id from anything (a URL, storage); the log when unknown. @param {any} v @returns {TabId} */
 export const tabId = (v) => TABS.find((t) => t.id === v)?.id ?? 'log';
@@ -482,14 +484,23 @@ export function filterNodes(nodes, text) {
 }
 
 /** "2 pub · 1 sub". @param {TopicInfo} t */
-export const pubSubText = (t) => `${t.publishers.length} pub · ${t.subscribers.length} sub`;
+export const pubSubText = (t) => m.inspect_pub_sub({ pub: int(t.publishers.length), sub: int(t.subscribers.length) });
+
+/** @typedef {'topic' | 'node' | 'status'} Counted */
+
+/** "12 topics", "1 node", "3 statuses". @param {number} n @param {Counted} what */
+function countOf(n, what) {
+  if (what === 'topic') return m.inspect_n_topics({ count: n });
+  if (what === 'node') return m.inspect_n_nodes({ count: n });
+  return m.inspect_n_statuses({ count: n });
+}
 
 /**
  * The count above a list: "12 topics", "3 of 12 topics" when the filter hides some.
- * @param {number} shown @param {number} total @param {string} one @param {string} [many]
+ * @param {number} shown @param {number} total @param {Counted} what
  */
-export const countText = (shown, total, one, many = `${one}s`) =>
-  (shown < total ? `${shown} of ${count(total, one, many)}` : count(total, one, many));
+export const countText = (shown, total, what) =>
+  (shown < total ? m.inspect_n_of({ shown: int(shown), total: countOf(total, what) }) : countOf(total, what));
 
 /**
  * The Nodes view's count: "12 nodes · 1 not responding" (of all nodes, whatever the filter shows).
@@ -498,11 +509,11 @@ export const countText = (shown, total, one, many = `${one}s`) =>
 export function nodeCountText(shown, all) {
   const dead = all.filter((n) => !n.alive).length;
   const base = countText(shown.length, all.length, 'node');
-  return dead ? `${base} · ${dead} not responding` : base;
+  return dead ? m.inspect_nodes_not_responding({ nodes: base, dead: int(dead) }) : base;
 }
 
 /** A node's state as text (never colour alone). @param {NodeInfo} n */
-export const aliveText = (n) => (n.alive ? 'alive' : 'not responding');
+export const aliveText = (n) => (n.alive ? m.inspect_node_alive() : m.inspect_node_not_responding());
 
 // ---- a topic's measured figures ----
 
@@ -541,10 +552,10 @@ export function normaliseStats(r) {
  */
 export function formatRate(hz) {
   if (typeof hz !== 'number' || !Number.isFinite(hz) || hz < 0) return '—';
-  if (hz >= 999.95) return `${Math.round(hz)} Hz`;
-  if (hz >= 9.995) return `${hz.toFixed(1)} Hz`;
-  if (hz >= 0.9995) return `${hz.toFixed(2)} Hz`;
-  return `${hz.toFixed(3)} Hz`;
+  if (hz >= 999.95) return `${int(Math.round(hz))} Hz`;
+  if (hz >= 9.995) return `${fmtFixed(hz, 1)} Hz`;
+  if (hz >= 0.9995) return `${fmtFixed(hz, 2)} Hz`;
+  return `${fmtFixed(hz, 3)} Hz`;
 }
 
 const BYTE_UNITS = ['B', 'KB', 'MB', 'GB', 'TB'];
@@ -558,7 +569,7 @@ export function formatBytes(n) {
     v /= 1000;
     i++;
   }
-  const figure = i === 0 ? String(Math.round(v)) : v < 99.95 ? v.toFixed(1) : String(Math.round(v));
+  const figure = i === 0 ? int(Math.round(v)) : v < 99.95 ? fmtFixed(v, 1) : int(Math.round(v));
   return `${figure} ${BYTE_UNITS[i]}`;
 }
 
@@ -571,17 +582,17 @@ export const formatBandwidth = (bps) => (formatBytes(bps) === '—' ? '—' : `$
  * @param {TopicStats | null} s @param {number} elapsedS  since this page began asking
  */
 export function rateText(s, elapsedS) {
-  if (!s) return 'measuring…';
+  if (!s) return m.inspect_measuring();
   if (!s.ok) return '—';
   if (s.messages >= 2) return formatRate(s.rate_hz);
   // Another page may have started measuring earlier: the window says how long the robot PC has been listening.
   const listened = Math.max(elapsedS, s.window_s);
-  if (s.last_age_s < 0) return listened >= NO_MESSAGES_AFTER_S ? 'no messages' : 'measuring…';
+  if (s.last_age_s < 0) return listened >= NO_MESSAGES_AFTER_S ? m.inspect_no_messages() : m.inspect_measuring();
   if (s.window_s >= STATS_WINDOW_S - 0.5) {
-    const w = Math.round(s.window_s);
-    return s.messages === 1 ? `1 message in the last ${w} s` : `no messages in the last ${w} s`;
+    const seconds = int(Math.round(s.window_s));
+    return s.messages === 1 ? m.inspect_one_message_in_last({ seconds }) : m.inspect_no_messages_in_last({ seconds });
   }
-  return 'measuring…';
+  return m.inspect_measuring();
 }
 
 /**
@@ -589,10 +600,10 @@ export function rateText(s, elapsedS) {
  * @param {TopicStats | null} s @param {number} elapsedS
  */
 export function bandwidthText(s, elapsedS) {
-  if (!s) return 'measuring…';
+  if (!s) return m.inspect_measuring();
   if (!s.ok) return '—';
   if (s.messages >= 1) return formatBandwidth(s.bandwidth_bps);
-  if (s.last_age_s < 0) return Math.max(elapsedS, s.window_s) >= NO_MESSAGES_AFTER_S ? 'no messages' : 'measuring…';
+  if (s.last_age_s < 0) return Math.max(elapsedS, s.window_s) >= NO_MESSAGES_AFTER_S ? m.inspect_no_messages() : m.inspect_measuring();
   return formatBandwidth(0);
 }
 
@@ -604,16 +615,16 @@ export const meanSizeText = (s) => (s?.ok && s.messages >= 1 ? formatBytes(s.mea
  * @param {number} ageS
  */
 export function ageText(ageS) {
-  if (typeof ageS !== 'number' || !Number.isFinite(ageS) || ageS < 0) return 'none received yet';
-  if (ageS < 1) return `${Math.round(ageS * 1000)} ms ago`;
-  if (ageS < 59.95) return `${ageS.toFixed(1)} s ago`;
+  if (typeof ageS !== 'number' || !Number.isFinite(ageS) || ageS < 0) return m.inspect_age_none();
+  if (ageS < 1) return m.inspect_ago({ age: `${int(Math.round(ageS * 1000))} ms` });
+  if (ageS < 59.95) return m.inspect_ago({ age: `${fmtFixed(ageS, 1)} s` });
   const min = Math.floor(ageS / 60);
-  if (min < 120) return `${min} min ago`;
-  return `${Math.floor(min / 60)} h ago`;
+  if (min < 120) return m.inspect_ago({ age: `${int(min)} min` });
+  return m.inspect_ago({ age: `${int(Math.floor(min / 60))} h` });
 }
 
 /** Under the figures: "Over the last 10 s (as rostopic hz and bw)". @param {TopicStats | null} s */
-export const windowText = (s) => (s?.ok && s.window_s > 0 ? `Over the last ${spanText(s.window_s)}` : '');
+export const windowText = (s) => (s?.ok && s.window_s > 0 ? m.inspect_window({ span: spanText(s.window_s) }) : '');
 
 // ---- a topic's last message (echo) as a tree ----
 
@@ -627,6 +638,9 @@ export function normaliseEcho(r) {
   const age = typeof r?.age_s === 'number' && Number.isFinite(r.age_s) && r.age_s >= 0 ? r.age_s : -1;
   return { ok: r?.ok === true, message: str(r?.message), type: str(r?.type), json: str(r?.json), age_s: age };
 }
+
+/** Why the echo's text is not JSON ('empty' is the page's own reason, in the user's language). @param {string} error */
+export const echoErrorText = (error) => (error === 'empty' ? m.inspect_echo_empty() : error);
 
 /**
  * The echo's JSON text, parsed; the raw text when it is not JSON (the page shows it as it came).
@@ -668,18 +682,18 @@ const CUT_ITEM = /^(?:…|\.\.\.)\s*(\d+) more \((\d+) items?\)$/;
  */
 export function cutArray(a) {
   const last = a.length ? a[a.length - 1] : null;
-  const m = typeof last === 'string' ? CUT_ITEM.exec(last.trim()) : null;
-  return m ? { total: Number(m[2]), shown: a.length - 1 } : null;
+  const hit = typeof last === 'string' ? CUT_ITEM.exec(last.trim()) : null;
+  return hit ? { total: Number(hit[2]), shown: a.length - 1 } : null;
 }
 
 /** A branch's summary: "[100 items, first 16 shown]", "[3 items]", "{2 fields}". @param {any} v */
 export function jsonSummary(v) {
   if (Array.isArray(v)) {
     const cut = cutArray(v);
-    if (cut) return `[${count(cut.total, 'item')}, first ${cut.shown} shown]`;
-    return `[${count(v.length, 'item')}]`;
+    if (cut) return `[${m.inspect_json_cut({ items: m.inspect_n_items({ count: cut.total }), shown: int(cut.shown) })}]`;
+    return `[${m.inspect_n_items({ count: v.length })}]`;
   }
-  if (v && typeof v === 'object') return `{${count(Object.keys(v).length, 'field')}}`;
+  if (v && typeof v === 'object') return `{${m.inspect_n_fields({ count: Object.keys(v).length })}}`;
   return '';
 }
 
@@ -701,7 +715,8 @@ export const DIAG_NO_UPDATE_S = 3;
  * @typedef {object} DiagLevel
  * @property {DiagLevelName} name
  * @property {number} value  diagnostic_msgs/DiagnosticStatus' level
- * @property {string} upper  what the row says ("OK", "WARN", "ERROR", "STALE")
+ * @property {string} upper  the level's ROS name ("OK", "WARN", "ERROR", "STALE")
+ * @property {string} badge  what the row says (the name in the user's language)
  * @property {number} rank  how bad, for "worst first" (higher is worse)
  * @property {DiagTone} tone
  */
@@ -711,11 +726,11 @@ export const DIAG_NO_UPDATE_S = 3;
  * a stale status may hide one (its reporter went silent), a warning is a known lesser problem.
  */
 export const DIAG_LEVELS = /** @type {readonly DiagLevel[]} */ (Object.freeze([
-  { name: 'ok', value: 0, upper: 'OK', rank: 0, tone: 'ok' },
-  { name: 'warn', value: 1, upper: 'WARN', rank: 1, tone: 'warn' },
-  { name: 'error', value: 2, upper: 'ERROR', rank: 3, tone: 'danger' },
-  { name: 'stale', value: 3, upper: 'STALE', rank: 2, tone: 'neutral' },
-]));
+  { name: 'ok', value: 0, upper: 'OK', get badge() { return m.inspect_diag_ok_badge(); }, rank: 0, tone: 'ok' },
+  { name: 'warn', value: 1, upper: 'WARN', get badge() { return m.inspect_diag_warn_badge(); }, rank: 1, tone: 'warn' },
+  { name: 'error', value: 2, upper: 'ERROR', get badge() { return m.inspect_diag_error_badge(); }, rank: 3, tone: 'danger' },
+  { name: 'stale', value: 3, upper: 'STALE', get badge() { return m.inspect_diag_stale_badge(); }, rank: 2, tone: 'neutral' },
+].map((l) => Object.freeze(l))));
 
 const DIAG_BY_NAME = new Map(DIAG_LEVELS.map((l) => [l.name, l]));
 
@@ -746,6 +761,9 @@ export const diagLevel = (name) => /** @type {DiagLevel} */ (DIAG_BY_NAME.get(na
 
 /** The group of statuses whose name has no "component: " part. */
 export const DIAG_OTHER_GROUP = 'other';
+
+/** A group's name as shown: the one without a component in the user's language. @param {string} name */
+export const diagGroupText = (name) => (name === DIAG_OTHER_GROUP ? m.inspect_diag_other() : name);
 
 /**
  * A status name's group and the rest: "vision: camera brightness" → { group: "vision", short: "camera brightness" }.
@@ -788,7 +806,8 @@ export function diagCounts(statuses) {
 }
 
 /** The summary line: "5 OK · 1 warning · 0 errors · 1 stale". @param {DiagCounts} c */
-export const diagSummaryText = (c) => `${c.ok} OK · ${count(c.warn, 'warning')} · ${count(c.error, 'error')} · ${c.stale} stale`;
+export const diagSummaryText = (c) =>
+  `${int(c.ok)} OK · ${m.inspect_n_warnings({ count: c.warn })} · ${m.inspect_n_errors({ count: c.error })} · ${m.inspect_n_stale({ count: c.stale })}`;
 
 /**
  * The worst of some levels ('ok' for none).
@@ -824,11 +843,11 @@ export function groupDiagnostics(statuses) {
 
 /** @typedef {'all' | 'problems'} DiagShow */
 
-/** The "Show" choices. */
+/** The "Show" choices (label: in the user's language). */
 export const DIAG_SHOW = /** @type {readonly { id: DiagShow, label: string }[]} */ (Object.freeze([
-  { id: 'all', label: 'All' },
-  { id: 'problems', label: 'Problems only' },
-]));
+  { id: 'all', get label() { return m.inspect_diag_show_all(); } },
+  { id: 'problems', get label() { return m.inspect_diag_show_problems(); } },
+].map((o) => Object.freeze(o))));
 
 /**
  * The statuses the filters let through: "problems" keeps WARN, ERROR and STALE; the text keeps those whose name,
@@ -853,8 +872,8 @@ export function filterDiagnostics(statuses, f) {
 export function diagAgeText(atMs, nowMs) {
   if (atMs === null || !Number.isFinite(atMs)) return { text: '', stale: false };
   const s = Math.max(0, Math.floor((nowMs - atMs) / 1000));
-  if (s < DIAG_NO_UPDATE_S) return { text: s < 1 ? 'updated just now' : `updated ${s} s ago`, stale: false };
-  if (s < 120) return { text: `no update for ${s} s`, stale: true };
+  if (s < DIAG_NO_UPDATE_S) return { text: s < 1 ? m.inspect_diag_updated_now() : m.inspect_diag_updated_ago({ age: `${int(s)} s` }), stale: false };
+  if (s < 120) return { text: m.inspect_diag_no_update({ age: `${int(s)} s` }), stale: true };
   const min = Math.floor(s / 60);
-  return { text: min < 120 ? `no update for ${min} min` : `no update for ${Math.floor(min / 60)} h`, stale: true };
+  return { text: m.inspect_diag_no_update({ age: min < 120 ? `${int(min)} min` : `${int(Math.floor(min / 60))} h` }), stale: true };
 }

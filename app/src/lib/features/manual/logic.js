@@ -7,6 +7,8 @@
  * joints in degrees, relative rotations in degrees, speeds as a fraction of the driver's limits.
  */
 import { commandGate } from '../../core/gate.js';
+import { m } from '$lib/paraglide/messages.js';
+import { fmtFixed } from '../../core/i18n.js';
 
 export const FEATURE_ID = 'manual';
 
@@ -61,20 +63,22 @@ export const clamp = (v, lo, hi) => Math.min(hi, Math.max(lo, v));
 export function parseNumber(text) {
   if (typeof text === 'number') return Number.isFinite(text) ? text : null;
   if (typeof text !== 'string') return null;
-  const t = text.trim().replace(',', '.');
+  // (A decimal comma, and the minus sign U+2212 some locales write, as the page shows numbers in the user's locale.)
+  const t = text.trim().replace(',', '.').replace(/^\u2212/, '-');
   if (t === '' || !/^[-+]?(\d+\.?\d*|\.\d+)(e[-+]?\d+)?$/i.test(t)) return null;
   const v = Number(t);
   return Number.isFinite(v) ? v : null;
 }
 
 /**
+ * A number with `digits` decimals in the user's locale ("12.50", "12,50").
  * @param {unknown} v @param {number} digits
  * @returns {string}  '—' for anything that is not a finite number; never "-0.0"
  */
 export function fixed(v, digits) {
   if (typeof v !== 'number' || !Number.isFinite(v)) return '—';
-  const s = v.toFixed(digits);
-  return /^-0\.?0*$/.test(s) ? s.slice(1) : s;
+  const s = fmtFixed(v, digits);
+  return /^[-\u2212]/.test(s) && !/[1-9]/.test(s) ? s.slice(1) : s;
 }
 
 // ---- the driver's answer to /cell/manual/groups ----
@@ -205,8 +209,12 @@ export function toolLabel(tool, action) {
  * @param {'joint' | 'cartesian'} mode @param {number} axis  0-based @param {1 | -1} direction
  */
 export function jogLabel(mode, axis, direction) {
-  const sign = direction > 0 ? '+' : '-';
-  return mode === 'joint' ? `Jog joint ${axis + 1} ${sign}` : `Jog ${CART_AXES[axis]} ${sign}`;
+  if (mode === 'joint') {
+    const joint = String(axis + 1);
+    return direction > 0 ? m.manual_jog_joint_plus({ joint }) : m.manual_jog_joint_minus({ joint });
+  }
+  const name = CART_AXES[axis];
+  return direction > 0 ? m.manual_jog_axis_plus({ axis: name }) : m.manual_jog_axis_minus({ axis: name });
 }
 
 /**
@@ -295,8 +303,8 @@ export function jogCommand({ group, mode, axis, direction, fraction, frame }) {
  * @returns {Built}
  */
 export function namedRequest(group, name, rates) {
-  if (!group) return { ok: false, error: 'Choose a motion group' };
-  if (!name) return { ok: false, error: 'Choose a named configuration' };
+  if (!group) return { ok: false, error: m.manual_choose_group() };
+  if (!name) return { ok: false, error: m.manual_choose_configuration() };
   return { ok: true, request: { group, name, speed: rates.speed, acceleration: rates.acceleration } };
 }
 
@@ -311,17 +319,17 @@ export function namedRequest(group, name, rates) {
  * @returns {Built}
  */
 export function relativeRequest(group, form, frame, rates) {
-  if (!group) return { ok: false, error: 'Choose a motion group' };
+  if (!group) return { ok: false, error: m.manual_choose_group() };
   const keys = /** @type {const} */ (['dx', 'dy', 'dz', 'drx', 'dry', 'drz']);
   /** @type {number[]} */
   const v = [];
   for (const k of keys) {
     const raw = form[k];
     const n = raw === undefined || String(raw).trim() === '' ? 0 : parseNumber(raw);
-    if (n === null) return { ok: false, error: `${k} is not a number` };
+    if (n === null) return { ok: false, error: m.manual_field_not_number({ field: k }) };
     v.push(n);
   }
-  if (v.every((n) => n === 0)) return { ok: false, error: 'Enter an offset first (all fields are 0)' };
+  if (v.every((n) => n === 0)) return { ok: false, error: m.manual_offset_empty() };
   const offset = [mmToM(v[0]), mmToM(v[1]), mmToM(v[2]), degToRad(v[3]), degToRad(v[4]), degToRad(v[5])];
   return { ok: true, request: { group, offset, frame: frame === 'tool' ? 'tool' : 'base', speed: rates.speed, acceleration: rates.acceleration } };
 }
@@ -332,13 +340,13 @@ export function relativeRequest(group, form, frame, rates) {
  * @returns {Built}
  */
 export function poseRequest(group, form, rates) {
-  if (!group) return { ok: false, error: 'Choose a motion group' };
+  if (!group) return { ok: false, error: m.manual_choose_group() };
   const keys = /** @type {const} */ (['x', 'y', 'z', 'rx', 'ry', 'rz']);
   /** @type {number[]} */
   const v = [];
   for (const k of keys) {
     const n = parseNumber(form[k]);
-    if (n === null) return { ok: false, error: `Enter ${k} (a number), or press "Use current pose"` };
+    if (n === null) return { ok: false, error: m.manual_pose_field_missing({ field: k }) };
     v.push(n);
   }
   const pose = [mmToM(v[0]), mmToM(v[1]), mmToM(v[2]), v[3], v[4], v[5]];
@@ -395,26 +403,54 @@ export function jointRows(positions, names = []) {
 
 /** @typedef {'ok' | 'warn' | 'danger' | 'neutral' | 'info'} Tone */
 
-/** "POWER_OFF" -> "Power off". @param {string} s */
+/** "POWER_OFF" -> "Power off": a UR robot or safety mode in words (an unknown one as written, humanized). @param {string} s */
 export function modeText(s) {
-  if (!s) return 'unknown';
+  if (!s) return m.manual_state_unknown();
+  switch (s) {
+    // Robot modes
+    case 'NO_CONTROLLER': return m.manual_mode_no_controller();
+    case 'DISCONNECTED': return m.manual_mode_disconnected();
+    case 'CONFIRM_SAFETY': return m.manual_mode_confirm_safety();
+    case 'BOOTING': return m.manual_mode_booting();
+    case 'POWER_OFF': return m.manual_mode_power_off();
+    case 'POWER_ON': return m.manual_mode_power_on();
+    case 'IDLE': return m.manual_mode_idle();
+    case 'BACKDRIVE': return m.manual_mode_backdrive();
+    case 'RUNNING': return m.manual_mode_running();
+    case 'UPDATING_FIRMWARE': return m.manual_mode_updating_firmware();
+    case 'CONTROLLER_NOT_RUNNING': return m.manual_mode_controller_not_running();
+    // Safety modes
+    case 'NORMAL': return m.manual_safety_normal();
+    case 'REDUCED': return m.manual_safety_reduced();
+    case 'PROTECTIVE_STOP': return m.manual_safety_protective_stop();
+    case 'RECOVERY': return m.manual_safety_recovery();
+    case 'SAFEGUARD_STOP': return m.manual_safety_safeguard_stop();
+    case 'SYSTEM_EMERGENCY_STOP': return m.manual_safety_system_emergency_stop();
+    case 'ROBOT_EMERGENCY_STOP': return m.manual_safety_robot_emergency_stop();
+    case 'VIOLATION': return m.manual_safety_violation();
+    case 'FAULT': return m.manual_safety_fault();
+    case 'VALIDATE_JOINT_ID': return m.manual_safety_validate_joint_id();
+    case 'UNDEFINED_SAFETY_MODE': return m.manual_safety_undefined();
+    case 'AUTOMATIC_MODE_SAFEGUARD_STOP': return m.manual_safety_automatic_mode_safeguard_stop();
+    case 'SYSTEM_THREE_POSITION_ENABLING_STOP': return m.manual_safety_three_position_enabling_stop();
+  }
   const t = s.toLowerCase().replace(/_/g, ' ');
   return t[0].toUpperCase() + t.slice(1);
 }
 
-/** @param {string} m  UR robot mode name @returns {Tone} */
-export function robotModeTone(m) {
-  if (m === 'RUNNING') return 'ok';
-  if (['IDLE', 'POWER_ON', 'BOOTING', 'POWER_OFF', 'BACKDRIVE', 'CONFIRM_SAFETY', 'UPDATING_FIRMWARE'].includes(m)) return 'warn';
-  if (!m) return 'neutral';
+/** @param {string} mode  UR robot mode name @returns {Tone} */
+export function robotModeTone(mode) {
+  if (mode === 'RUNNING') return 'ok';
+  if (['IDLE', 'POWER_ON', 'BOOTING', 'POWER_OFF', 'BACKDRIVE', 'CONFIRM_SAFETY', 'UPDATING_FIRMWARE'].includes(mode)) return 'warn';
+  if (!mode) return 'neutral';
   return 'danger';
 }
 
-/** @param {string} m  UR safety mode name @returns {Tone} */
-export function safetyTone(m) {
-  if (m === 'NORMAL') return 'ok';
-  if (m === 'REDUCED' || m === 'RECOVERY') return 'warn';
-  if (!m) return 'neutral';
+/** @param {string} mode  UR safety mode name @returns {Tone} */
+export function safetyTone(mode) {
+  if (mode === 'NORMAL') return 'ok';
+  if (mode === 'REDUCED' || mode === 'RECOVERY') return 'warn';
+  if (!mode) return 'neutral';
   return 'danger';
 }
 
@@ -470,31 +506,35 @@ export function statusView(s) {
   if (!s) {
     return {
       known: false,
-      driver: { text: 'no state from the robot driver yet', tone: /** @type {Tone} */ ('neutral') },
-      robot: { text: 'unknown', tone: /** @type {Tone} */ ('neutral') },
-      safety: { text: 'unknown', tone: /** @type {Tone} */ ('neutral') },
-      motion: { text: 'unknown', moving: false, progress: 1 },
+      driver: { text: m.manual_state_none(), tone: /** @type {Tone} */ ('neutral') },
+      robot: { text: m.manual_state_unknown(), tone: /** @type {Tone} */ ('neutral') },
+      safety: { text: m.manual_state_unknown(), tone: /** @type {Tone} */ ('neutral') },
+      motion: { text: m.manual_state_unknown(), moving: false, progress: 1 },
       message: '',
     };
   }
   const moving = s.motion !== 'idle' && s.motion !== '';
-  const target = s.motion_target ? ` ${s.motion_target}` : '';
+  const target = s.motion_target;
+  const group = s.motion_group;
   const motionText = !moving
-    ? 'idle'
+    ? m.manual_motion_idle()
     : s.motion === 'moving'
-      ? `moving to${target}`
+      ? (target ? m.manual_motion_moving_to({ target }) : m.manual_motion_moving())
       : s.motion === 'tool'
-        ? `tool action${target}`
+        ? (target ? m.manual_motion_tool_target({ target }) : m.manual_motion_tool())
         : s.motion === 'jogging'
-          ? `jogging${s.motion_group ? ` ${s.motion_group}` : ''}`
-          : s.motion;
+          ? (group ? m.manual_motion_jogging_group({ group }) : m.manual_motion_jogging())
+          : s.motion === 'stopping'
+            ? m.manual_motion_stopping()
+            : s.motion;
+  const controller = s.controller;
   return {
     known: true,
     driver: s.connected
-      ? { text: `connected${s.controller ? ` to ${s.controller}` : ''}`, tone: /** @type {Tone} */ ('ok') }
-      : { text: `unreachable${s.controller ? ` (${s.controller})` : ''}`, tone: /** @type {Tone} */ ('danger') },
-    robot: { text: s.connected ? modeText(s.robot_mode) : 'unknown', tone: s.connected ? robotModeTone(s.robot_mode) : /** @type {Tone} */ ('neutral') },
-    safety: { text: s.connected ? modeText(s.safety_mode) : 'unknown', tone: s.connected ? safetyTone(s.safety_mode) : /** @type {Tone} */ ('neutral') },
+      ? { text: controller ? m.manual_driver_connected_to({ controller }) : m.manual_driver_connected(), tone: /** @type {Tone} */ ('ok') }
+      : { text: controller ? m.manual_driver_unreachable_at({ controller }) : m.manual_driver_unreachable(), tone: /** @type {Tone} */ ('danger') },
+    robot: { text: s.connected ? modeText(s.robot_mode) : m.manual_state_unknown(), tone: s.connected ? robotModeTone(s.robot_mode) : /** @type {Tone} */ ('neutral') },
+    safety: { text: s.connected ? modeText(s.safety_mode) : m.manual_state_unknown(), tone: s.connected ? safetyTone(s.safety_mode) : /** @type {Tone} */ ('neutral') },
     motion: { text: motionText, moving, progress: s.progress },
     message: s.message,
   };
@@ -503,8 +543,11 @@ export function statusView(s) {
 /** "robot controller at 10.0.0.2 is unreachable" -> "Robot controller at 10.0.0.2 is unreachable". @param {string} s */
 const sentence = (s) => (s ? s[0].toUpperCase() + s.slice(1) : s);
 
-/** The manual page's wording for a role without the command grant (the e2e tests look for "role may not"). */
-export const VIEW_ONLY_REASON = 'View only: your role may not move the robot';
+/**
+ * The manual page's wording for a role without the command grant (the e2e tests look for "role may not").
+ * (In the language of the page: a change of language reloads it.)
+ */
+export const VIEW_ONLY_REASON = m.manual_view_only();
 
 /**
  * May the page's motion controls (jog, moves, tool actions) be used now, and if not, why (in words).
@@ -522,13 +565,14 @@ export const VIEW_ONLY_REASON = 'View only: your role may not move the robot';
 export function manualGate({ offline, conn, commands, holdsLease, driver = null, busy = false }) {
   const link = commandGate({ offline, conn });
   if (!link.ok) return link;
-  if (Array.isArray(commands) && !commands.includes(FEATURE_ID)) return { ok: false, reason: VIEW_ONLY_REASON };
+  if (Array.isArray(commands) && !commands.includes(FEATURE_ID)) return { ok: false, reason: m.manual_view_only() };
   if (driver && !driver.connected) {
-    return { ok: false, reason: sentence(driver.message) || `Robot controller${driver.controller ? ` at ${driver.controller}` : ''} is unreachable` };
+    const controller = driver.controller;
+    return { ok: false, reason: sentence(driver.message) || (controller ? m.manual_controller_unreachable_at({ controller }) : m.manual_controller_unreachable()) };
   }
   const lease = commandGate({ offline: false, needsLease: true, holdsLease });
   if (!lease.ok) return lease;
-  if (busy) return { ok: false, reason: 'A move is running: wait for it or press "Stop move"' };
+  if (busy) return { ok: false, reason: m.manual_move_running() };
   return { ok: true, reason: '' };
 }
 
@@ -615,12 +659,12 @@ export class JogHold {
    * @returns {boolean}  whether a jog was running
    */
   stop(reason = 'released') {
-    const m = this.#msg;
+    const running = this.#msg;
     this.#clearTimer();
-    if (!m) return false;
+    if (!running) return false;
     this.#msg = null;
     try {
-      this.publish({ ...m, direction: 0 });
+      this.publish({ ...running, direction: 0 });
     } catch {
       // Not connected or refused: the driver's timeout stops the arm.
     }
@@ -636,10 +680,10 @@ export class JogHold {
 
   /** @returns {boolean} */
   #send() {
-    const m = this.#msg;
-    if (!m) return false;
+    const running = this.#msg;
+    if (!running) return false;
     try {
-      this.publish(m);
+      this.publish(running);
       return true;
     } catch (e) {
       this.stop(`not sent: ${e instanceof Error ? e.message : String(e)}`);

@@ -1,7 +1,9 @@
 /**
  * The Modules page's plain logic: the ROS names, what the modules node's state message means for the page,
- * and which modules "Launch all" / "Stop all" act on. No Svelte, no ROS: tests import it directly.
+ * and which modules "Launch all" / "Stop all" act on. No Svelte, no ROS: tests import it directly. Texts come from
+ * messages/modules.
  */
+import { m } from '$lib/paraglide/messages.js';
 
 export const FEATURE_ID = 'modules';
 
@@ -18,13 +20,13 @@ export const OUTPUT_LINES = 60;
 
 /** @typedef {'active' | 'inactive' | 'transitioning' | 'incomplete' | 'unknown'} ModuleStateName */
 
-/** Colour (tone) and label of each state: the label is always shown, never colour alone. */
+/** Colour (tone) and label (in the user's language) of each state: the label is always shown, never colour alone. */
 export const STATE_VIEW = Object.freeze({
-  active: { tone: 'ok', label: 'Active' },
-  inactive: { tone: 'neutral', label: 'Inactive' },
-  transitioning: { tone: 'warn', label: 'Transitioning' },
-  incomplete: { tone: 'danger', label: 'Incomplete' },
-  unknown: { tone: 'neutral', label: 'Unknown' },
+  active: { tone: 'ok', get label() { return m.modules_state_active(); } },
+  inactive: { tone: 'neutral', get label() { return m.modules_state_inactive(); } },
+  transitioning: { tone: 'warn', get label() { return m.modules_state_transitioning(); } },
+  incomplete: { tone: 'danger', get label() { return m.modules_state_incomplete(); } },
+  unknown: { tone: 'neutral', get label() { return m.modules_state_unknown(); } },
 });
 
 /**
@@ -52,39 +54,39 @@ function stateName(s) {
 export function moduleViews(visible, msg) {
   /** @type {Map<string, any>} */
   const byName = new Map();
-  for (const m of Array.isArray(msg?.modules) ? msg.modules : []) if (m && typeof m.name === 'string') byName.set(m.name, m);
+  for (const x of Array.isArray(msg?.modules) ? msg.modules : []) if (x && typeof x.name === 'string') byName.set(x.name, x);
   return (visible ?? []).map(({ name }) => {
-    const m = byName.get(name);
-    const nodes = Array.isArray(m?.nodes) ? m.nodes.map((/** @type {string} */ n, /** @type {number} */ i) => ({ name: String(n), alive: !!m.alive?.[i] })) : [];
+    const x = byName.get(name);
+    const nodes = Array.isArray(x?.nodes) ? x.nodes.map((/** @type {string} */ n, /** @type {number} */ i) => ({ name: String(n), alive: !!x.alive?.[i] })) : [];
     return {
       name,
-      state: m ? stateName(m.state) : 'unknown',
+      state: x ? stateName(x.state) : 'unknown',
       nodes,
-      launchable: !!m?.launchable,
-      target: typeof m?.target === 'string' ? m.target : '',
-      message: typeof m?.message === 'string' ? m.message : '',
+      launchable: !!x?.launchable,
+      target: typeof x?.target === 'string' ? x.target : '',
+      message: typeof x?.message === 'string' ? x.message : '',
     };
   });
 }
 
-/** What the state badge says while transitioning: launching or stopping. @param {ModuleView} m */
-export function stateLabel(m) {
-  if (m.state === 'transitioning') return m.target === 'inactive' ? 'Stopping…' : 'Launching…';
-  return STATE_VIEW[m.state].label;
+/** What the state badge says while transitioning: launching or stopping. @param {ModuleView} mod */
+export function stateLabel(mod) {
+  if (mod.state === 'transitioning') return mod.target === 'inactive' ? m.modules_stopping() : m.modules_launching();
+  return STATE_VIEW[mod.state].label;
 }
 
 /**
  * May this module be launched / stopped now? Never while it settles (transitioning) or when it has no launch files.
- * @param {ModuleView} m
+ * @param {ModuleView} mod
  * @param {'launch' | 'stop'} action
  * @returns {{ ok: boolean, reason: string }}
  */
-export function moduleAction(m, action) {
-  if (!m.launchable) return { ok: false, reason: 'Monitored only: not started from here' };
-  if (m.state === 'transitioning') return { ok: false, reason: 'Wait until it settles' };
-  if (m.state === 'unknown') return { ok: false, reason: 'State not known yet' };
-  if (action === 'launch' && m.state === 'active') return { ok: false, reason: 'Already running' };
-  if (action === 'stop' && m.state === 'inactive') return { ok: false, reason: 'Not running' };
+export function moduleAction(mod, action) {
+  if (!mod.launchable) return { ok: false, reason: m.modules_reason_monitored() };
+  if (mod.state === 'transitioning') return { ok: false, reason: m.modules_reason_settling() };
+  if (mod.state === 'unknown') return { ok: false, reason: m.modules_reason_unknown() };
+  if (action === 'launch' && mod.state === 'active') return { ok: false, reason: m.modules_reason_running() };
+  if (action === 'stop' && mod.state === 'inactive') return { ok: false, reason: m.modules_reason_not_running() };
   return { ok: true, reason: '' };
 }
 
@@ -93,12 +95,12 @@ export function moduleAction(m, action) {
  * @param {ModuleView[]} modules @param {'launch' | 'stop'} action
  */
 export function bulkTargets(modules, action) {
-  return modules.filter((m) => moduleAction(m, action).ok);
+  return modules.filter((mod) => moduleAction(mod, action).ok);
 }
 
 /** "2 of 3 active", for the page head and Home. @param {ModuleView[]} modules */
 export function summary(modules) {
   const counts = { active: 0, inactive: 0, transitioning: 0, incomplete: 0, unknown: 0 };
-  for (const m of modules) counts[m.state]++;
+  for (const mod of modules) counts[mod.state]++;
   return { ...counts, total: modules.length };
 }

@@ -4,6 +4,9 @@
  * No Svelte, no ROS: tests import it directly.
  */
 
+import { m } from '$lib/paraglide/messages.js';
+import { cellText, getLocale } from '../../core/i18n.js';
+
 export const FEATURE_ID = 'parameters';
 
 export const NAMES = Object.freeze({
@@ -38,7 +41,7 @@ const typeOf = (t) => (['int', 'float', 'bool', 'string', 'enum'].includes(t) ? 
 export function paramDef(p) {
   return {
     id: String(p?.id ?? ''),
-    category: String(p?.category || 'General'),
+    category: String(p?.category || m.parameters_category_general()),
     label: String(p?.label || p?.id || ''),
     type: typeOf(p?.type),
     unit: String(p?.unit ?? ''),
@@ -63,47 +66,97 @@ export function byCategory(defs) {
   return [...m].map(([category, items]) => ({ category, items }));
 }
 
+// ---- numbers in the user's locale ----
+// The node writes numbers with a decimal point ("0.5", "-3", "1e-05") and takes them back so. The page shows them with
+// the user's decimal separator and minus sign ("0,5", "−3" in Finnish), digits unchanged (60.0 stays 60.0), and
+// takes what the user types in either form.
+
+const PLAIN_NUMBER = /^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/;
+
+/** The user's decimal separator and minus sign. */
+function numberSymbols() {
+  const parts = new Intl.NumberFormat(getLocale()).formatToParts(-1.5);
+  return {
+    decimal: parts.find((x) => x.type === 'decimal')?.value ?? '.',
+    minus: parts.find((x) => x.type === 'minusSign')?.value ?? '-',
+  };
+}
+
+/**
+ * A number as the node writes it, in the user's locale; any other text as it is.
+ * @param {string} text
+ */
+export function localNumber(text) {
+  const s = String(text ?? '');
+  if (!PLAIN_NUMBER.test(s.trim())) return s;
+  const { decimal, minus } = numberSymbols();
+  return s.replace('.', decimal).replace(/^(\s*)-/, `$1${minus}`);
+}
+
+/**
+ * A number typed in the user's locale ("−0,5") as the node takes it ("-0.5"); other text trimmed, as it is.
+ * @param {string} text
+ */
+function nodeNumber(text) {
+  const { decimal, minus } = numberSymbols();
+  let s = String(text ?? '').trim().replace(/^[\u2212]/, '-');
+  if (minus !== '-' && s.startsWith(minus)) s = `-${s.slice(minus.length)}`;
+  if (decimal !== '.' && s.split(decimal).length === 2 && !s.includes('.')) s = s.replace(decimal, '.');
+  return s;
+}
+
 /** @param {number} n */
-const show = (n) => String(n);
+const show = (n) => localNumber(String(n));
+
+/** The saved value as the page shows it (numbers in the user's locale). @param {ParamDef} d */
+export function shownValue(d) {
+  return d.type === 'int' || d.type === 'float' ? localNumber(d.value) : d.value;
+}
 
 /**
  * Why a value is not acceptable for its parameter ('' when it is). Texts name the field, the value and the limit.
  * @param {ParamDef} d @param {string} text
  */
 export function validate(d, text) {
-  const v = String(text ?? '').trim();
+  const typed = String(text ?? '').trim();
+  const v = canonical(d, text);
+  const label = cellText(d.label);
   const unit = d.unit ? ` ${d.unit}` : '';
   const range = (/** @type {number} */ n) => {
-    if (d.min !== null && n < d.min) return `${d.label}: ${show(n)}${unit} is below the minimum ${show(d.min)}${unit}`;
-    if (d.max !== null && n > d.max) return `${d.label}: ${show(n)}${unit} is above the maximum ${show(d.max)}${unit}`;
+    if (d.min !== null && n < d.min) return m.parameters_below_min({ label, value: show(n), unit, min: show(d.min) });
+    if (d.max !== null && n > d.max) return m.parameters_above_max({ label, value: show(n), unit, max: show(d.max) });
     return '';
   };
   switch (d.type) {
     case 'int':
-      if (!/^[+-]?\d+$/.test(v)) return `${d.label}: '${v}' is not a whole number`;
+      if (!/^[+-]?\d+$/.test(v)) return m.parameters_not_whole({ label, value: typed });
       return range(Number(v));
     case 'float': {
-      if (v === '' || !/^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$/.test(v)) return `${d.label}: '${v}' is not a number`;
+      if (v === '' || !PLAIN_NUMBER.test(v)) return m.parameters_not_number({ label, value: typed });
       const frac = /^[^eE]*\.(\d+)/.exec(v)?.[1] ?? '';
       if (d.decimals !== null && !/[eE]/.test(v) && frac.replace(/0+$/, '').length > d.decimals) {
-        return `${d.label}: at most ${d.decimals} digit${d.decimals === 1 ? '' : 's'} after the point`;
+        return m.parameters_too_many_decimals({ label, count: d.decimals });
       }
       return range(Number(v));
     }
     case 'bool':
-      return v === 'true' || v === 'false' ? '' : `${d.label}: '${v}' is not true or false`;
+      return v === 'true' || v === 'false' ? '' : m.parameters_not_bool({ label, value: v });
     case 'enum':
-      return d.options.includes(v) ? '' : `${d.label}: '${v}' is not one of ${d.options.join(', ')}`;
+      return d.options.includes(v) ? '' : m.parameters_not_option({ label, value: v, options: d.options.join(', ') });
     default:
-      if ([...String(text ?? '')].length > d.maxLength) return `${d.label}: at most ${d.maxLength} characters`;
+      if ([...String(text ?? '')].length > d.maxLength) return m.parameters_too_long({ label, max: d.maxLength });
       // (Line feed and tab are allowed, as the node allows them.)
       // eslint-disable-next-line no-control-regex
-      return /[\u0000-\u0008\u000b-\u001f\u007f]/.test(String(text ?? '')) ? `${d.label}: control characters are not allowed` : '';
+      return /[\u0000-\u0008\u000b-\u001f\u007f]/.test(String(text ?? '')) ? m.parameters_control_chars({ label }) : '';
   }
 }
 
-/** The text a value is sent and compared as (numbers trimmed; strings as typed). @param {ParamDef} d @param {string} text */
+/**
+ * The text a value is sent and compared as (numbers trimmed, with a decimal point; strings as typed).
+ * @param {ParamDef} d @param {string} text
+ */
 export function canonical(d, text) {
+  if (d.type === 'int' || d.type === 'float') return nodeNumber(text);
   return d.type === 'string' ? String(text ?? '') : String(text ?? '').trim();
 }
 
@@ -150,7 +203,7 @@ export function problems(defs, draft) {
 export function fieldErrors(r) {
   /** @type {Record<string, string>} */
   const out = {};
-  for (const e of Array.isArray(r?.errors) ? r.errors : []) if (e?.id) out[String(e.id)] = String(e.message ?? 'invalid');
+  for (const e of Array.isArray(r?.errors) ? r.errors : []) if (e?.id) out[String(e.id)] = String(e.message ?? m.parameters_invalid());
   return out;
 }
 

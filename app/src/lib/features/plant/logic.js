@@ -5,7 +5,9 @@
  * API (bff/src/features/plant): GET /api/plant/cells -> { broker, cells } (see PlantData);
  * GET /api/plant/events -> Server-Sent Events, `event: cells` with the same JSON on connect and after every change.
  */
+import { m } from '$lib/paraglide/messages.js';
 import { request } from '../../core/api.js';
+import { fmtDateTime, fmtFixed, fmtNumber, getLocale } from '../../core/i18n.js';
 
 export const FEATURE_ID = 'plant';
 
@@ -128,11 +130,24 @@ export function hasAlarm(c) {
   return c.alarms > 0 || c.severity >= 2 || !CALM_SAFETY.includes(c.safety.trim().toLowerCase());
 }
 
-/** @param {number} n @param {string} one @param {string} [many] */
-const plural = (n, one, many = `${one}s`) => `${n} ${n === 1 ? one : many}`;
-
 /** "Protective stop" from "protective stop". @param {string} s */
 const sentence = (s) => (s ? s[0].toUpperCase() + s.slice(1) : s);
+
+/**
+ * A safety state (SafetyStatus.status: normal, warning, fault, safeguard stop, protective stop, emergency stop) in
+ * words, as a sentence; an unknown one as it came.
+ * @param {string} s
+ */
+function safetyWords(s) {
+  switch (s.trim().toLowerCase()) {
+    case 'warning': return m.plant_safety_warning();
+    case 'fault': return m.plant_safety_fault();
+    case 'safeguard stop': return m.plant_safety_safeguard_stop();
+    case 'protective stop': return m.plant_safety_protective_stop();
+    case 'emergency stop': return m.plant_safety_emergency_stop();
+    default: return sentence(s.trim());
+  }
+}
 
 /**
  * The cell's status: alarm (wins, even for an offline cell whose last report had one), offline, ok; with its label.
@@ -141,16 +156,16 @@ const sentence = (s) => (s ? s[0].toUpperCase() + s.slice(1) : s);
 export function cellStatus(c) {
   if (hasAlarm(c)) {
     const parts = [];
-    if (c.alarms > 0) parts.push(plural(c.alarms, 'active alarm'));
-    if (!CALM_SAFETY.includes(c.safety.trim().toLowerCase())) parts.push(sentence(c.safety.trim()));
-    if (!parts.length) parts.push('Error alarm');
-    if (!c.online) parts.push('offline');
+    if (c.alarms > 0) parts.push(m.plant_n_active_alarms({ count: c.alarms }));
+    if (!CALM_SAFETY.includes(c.safety.trim().toLowerCase())) parts.push(safetyWords(c.safety));
+    if (!parts.length) parts.push(m.plant_error_alarm());
+    if (!c.online) parts.push(m.plant_offline_part());
     return { status: 'alarm', text: sentence(parts.join(' · ')) };
   }
-  if (!c.online) return { status: 'offline', text: 'Offline' };
+  if (!c.online) return { status: 'offline', text: m.plant_offline() };
   // Its BFF is up but cannot reach its ROS side: nothing it reports about the cell is current.
-  if (!c.ros) return { status: 'offline', text: 'No ROS data' };
-  return { status: 'ok', text: 'OK' };
+  if (!c.ros) return { status: 'offline', text: m.plant_no_ros_data() };
+  return { status: 'ok', text: m.plant_ok() };
 }
 
 const RANK = { alarm: 0, offline: 1, ok: 2 };
@@ -170,30 +185,31 @@ export function sortCells(cells) {
 
 // ---- times ----
 
-const MONTHS = ['Jan', 'Feb', 'Mar', 'Apr', 'May', 'Jun', 'Jul', 'Aug', 'Sep', 'Oct', 'Nov', 'Dec'];
-const pad = (/** @type {number} */ n) => String(n).padStart(2, '0');
-
 /**
- * A local wall-clock time: "10:32" on the same day as `nowMs`, "24 Nov 10:32" otherwise.
+ * A local wall-clock time (24 h, in the user's locale): "10:32" on the same day as `nowMs`, "24 Nov 10:32" otherwise.
  * @param {number} ms @param {number} nowMs
  */
 export function formatClock(ms, nowMs) {
   const d = new Date(ms);
   const n = new Date(nowMs);
-  const hm = `${pad(d.getHours())}:${pad(d.getMinutes())}`;
+  const hm = fmtDateTime(d, { hour: '2-digit', minute: '2-digit', hourCycle: 'h23' });
   const sameDay = d.getFullYear() === n.getFullYear() && d.getMonth() === n.getMonth() && d.getDate() === n.getDate();
-  return sameDay ? hm : `${d.getDate()} ${MONTHS[d.getMonth()]} ${hm}`;
+  if (sameDay) return hm;
+  // The month as a date writes it in the user's language ("Nov", "nov", "Nov.", Finnish "11").
+  const parts = new Intl.DateTimeFormat(getLocale(), { day: 'numeric', month: 'short' }).formatToParts(d);
+  const month = parts.find((p) => p.type === 'month')?.value ?? String(d.getMonth() + 1);
+  return m.plant_clock_date({ day: fmtNumber(d.getDate()), month, time: hm });
 }
 
 /** A duration, coarse: "40 s", "5 min", "2 h 5 min", "3 d". @param {number} ms */
 export function formatDuration(ms) {
   const s = Math.max(0, Math.floor(ms / 1000));
-  if (s < 60) return `${s} s`;
-  const m = Math.floor(s / 60);
-  if (m < 60) return `${m} min`;
-  const h = Math.floor(m / 60);
-  if (h < 48) return m % 60 ? `${h} h ${m % 60} min` : `${h} h`;
-  return `${Math.floor(h / 24)} d`;
+  if (s < 60) return m.plant_dur_s({ n: fmtNumber(s) });
+  const min = Math.floor(s / 60);
+  if (min < 60) return m.plant_dur_min({ n: fmtNumber(min) });
+  const h = Math.floor(min / 60);
+  if (h < 48) return min % 60 ? m.plant_dur_h_min({ h: fmtNumber(h), min: fmtNumber(min % 60) }) : m.plant_dur_h({ h: fmtNumber(h) });
+  return m.plant_dur_d({ n: fmtNumber(Math.floor(h / 24)) });
 }
 
 /**
@@ -202,21 +218,22 @@ export function formatDuration(ms) {
  */
 export function formatSince(sinceMs, nowMs) {
   if (typeof sinceMs !== 'number' || !Number.isFinite(sinceMs) || sinceMs <= 0) return '';
-  return `since ${formatClock(sinceMs, nowMs)} (${formatDuration(nowMs - sinceMs)})`;
+  return m.plant_since({ time: formatClock(sinceMs, nowMs), duration: formatDuration(nowMs - sinceMs) });
 }
 
 /** "Online since 10:32 (5 min)", "Offline since 10:40 (3 min)", or just "Online"/"Offline". @param {PlantCell} c @param {number} nowMs */
 export function onlineText(c, nowMs) {
   const since = formatSince(c.since, nowMs);
-  return `${c.online ? 'Online' : 'Offline'}${since ? ` ${since}` : ''}`;
+  const status = c.online ? m.plant_online() : m.plant_offline();
+  return since ? m.plant_status_since({ status, since }) : status;
 }
 
 /** A cycle time: "8.3 s", "2 min 5 s"; "—" for none (0) or unknown. @param {number} s */
 export function formatCycleTime(s) {
   if (typeof s !== 'number' || !Number.isFinite(s) || s <= 0) return '—';
-  if (s < 59.95) return `${s.toFixed(1)} s`;
+  if (s < 59.95) return m.plant_cycle_s({ s: fmtFixed(s, 1) });
   const whole = Math.round(s);
-  return `${Math.floor(whole / 60)} min ${whole % 60} s`;
+  return m.plant_cycle_min_s({ min: fmtNumber(Math.floor(whole / 60)), s: fmtNumber(whole % 60) });
 }
 
 // ---- the card's lines ----
@@ -228,9 +245,9 @@ export function formatCycleTime(s) {
 export function shiftText(c) {
   const s = c.shift;
   if (!s) return '';
-  const cycles = `${s.cycles_last_hour} ${s.cycles_last_hour === 1 ? 'cycle' : 'cycles'} in the last hour`;
+  const cycles = m.plant_shift_cycles({ count: s.cycles_last_hour });
   if (s.running_share === null || s.observed_s <= 0) return cycles;
-  return `${cycles} · running ${Math.round(s.running_share * 100)} % of ${formatDuration(s.observed_s * 1000)}`;
+  return m.plant_shift_running({ cycles, share: fmtNumber(Math.round(s.running_share * 100)), duration: formatDuration(s.observed_s * 1000) });
 }
 
 /**
@@ -239,34 +256,76 @@ export function shiftText(c) {
  */
 export function alarmLine(c) {
   const active = c.alarms > 0 || c.severity >= 2;
-  if (!active) return { active, text: 'No active alarm' };
-  const count = c.alarms > 0 ? plural(c.alarms, 'active alarm') : 'Error alarm';
-  return { active, text: c.alarm ? `${count}: ${c.alarm}` : count };
+  if (!active) return { active, text: m.plant_no_active_alarm() };
+  const count = c.alarms > 0 ? m.plant_n_active_alarms({ count: c.alarms }) : m.plant_error_alarm();
+  return { active, text: c.alarm ? m.plant_alarm_with_text({ count, text: c.alarm }) : count };
 }
 
 /** The safety state when it is not normal ('' otherwise). @param {PlantCell} c */
 export function safetyText(c) {
   const s = c.safety.trim();
-  return CALM_SAFETY.includes(s.toLowerCase()) ? '' : sentence(s);
+  return CALM_SAFETY.includes(s.toLowerCase()) ? '' : safetyWords(s);
+}
+
+/** A process state (ProcessState.state) in words; an unknown one as it came. @param {string} s */
+function processWords(s) {
+  switch (s) {
+    case 'idle': return m.plant_process_idle();
+    case 'running': return m.plant_process_running();
+    case 'pausing': return m.plant_process_pausing();
+    case 'paused': return m.plant_process_paused();
+    case 'stopping': return m.plant_process_stopping();
+    case 'error': return m.plant_process_error();
+    case 'unknown': return m.plant_process_unknown();
+    default: return s;
+  }
 }
 
 /** "running · Pick part", "idle", "—". @param {PlantCell} c */
 export function processText(c) {
-  return [c.process, c.operation].filter(Boolean).join(' · ') || '—';
+  return [processWords(c.process), c.operation].filter(Boolean).join(' · ') || '—';
+}
+
+/** A robot mode (the UR driver's robot mode name) in words; an unknown one as it came. @param {string} mode */
+function robotModeWords(mode) {
+  switch (mode) {
+    case 'NO_CONTROLLER': return m.plant_robot_mode_no_controller();
+    case 'DISCONNECTED': return m.plant_robot_mode_disconnected();
+    case 'CONFIRM_SAFETY': return m.plant_robot_mode_confirm_safety();
+    case 'BOOTING': return m.plant_robot_mode_booting();
+    case 'POWER_OFF': return m.plant_robot_mode_power_off();
+    case 'POWER_ON': return m.plant_robot_mode_power_on();
+    case 'IDLE': return m.plant_robot_mode_idle();
+    case 'BACKDRIVE': return m.plant_robot_mode_backdrive();
+    case 'RUNNING': return m.plant_robot_mode_running();
+    case 'UPDATING_FIRMWARE': return m.plant_robot_mode_updating_firmware();
+    default: return mode;
+  }
 }
 
 /** "ur5: connected, RUNNING", "ur5: not connected". @param {PlantRobot} r */
 export function robotText(r) {
-  const name = r.group || 'robot';
-  if (!r.connected) return `${name}: not connected`;
-  return r.mode ? `${name}: connected, ${r.mode}` : `${name}: connected`;
+  const name = r.group || m.plant_robot_default();
+  if (!r.connected) return m.plant_robot_not_connected({ name });
+  return r.mode ? m.plant_robot_connected_mode({ name, mode: robotModeWords(r.mode) }) : m.plant_robot_connected({ name });
 }
 
 /** "3 of 4 modules active"; '' with no modules. @param {PlantModule[]} modules */
 export function modulesText(modules) {
   if (!modules.length) return '';
-  const active = modules.filter((m) => m.state.toLowerCase() === 'active').length;
-  return `${active} of ${modules.length} ${modules.length === 1 ? 'module' : 'modules'} active`;
+  const active = modules.filter((x) => x.state.toLowerCase() === 'active').length;
+  return m.plant_modules_active({ active: fmtNumber(active), count: modules.length });
+}
+
+/** A module's state (ModuleStates) in words; an unknown one as it came. @param {string} state */
+export function moduleStateText(state) {
+  switch (state.toLowerCase()) {
+    case 'active': return m.plant_module_active();
+    case 'inactive': return m.plant_module_inactive();
+    case 'transitioning': return m.plant_module_transitioning();
+    case 'incomplete': return m.plant_module_incomplete();
+    default: return state;
+  }
 }
 
 // ---- the header ----
@@ -277,11 +336,11 @@ export function modulesText(modules) {
  */
 export function brokerView(b) {
   switch (b.state) {
-    case 'connected': return { tone: 'ok', text: 'Broker connected' };
-    case 'connecting': return { tone: 'info', text: 'Connecting to the broker…' };
-    case 'down': return { tone: 'danger', text: b.error ? `Broker unreachable: ${b.error}` : 'Broker unreachable' };
-    case 'off': return { tone: 'neutral', text: 'Broker off: the plant link is not configured' };
-    default: return { tone: 'neutral', text: `Broker ${b.state || 'unknown'}` };
+    case 'connected': return { tone: 'ok', text: m.plant_broker_connected() };
+    case 'connecting': return { tone: 'info', text: m.plant_broker_connecting() };
+    case 'down': return { tone: 'danger', text: b.error ? m.plant_broker_unreachable_error({ error: b.error }) : m.plant_broker_unreachable() };
+    case 'off': return { tone: 'neutral', text: m.plant_broker_off() };
+    default: return { tone: 'neutral', text: b.state ? m.plant_broker_state({ state: b.state }) : m.plant_broker_unknown() };
   }
 }
 
@@ -294,7 +353,7 @@ export function countText(cells) {
     if (s === 'alarm') alarms++;
     else if (s === 'offline') offline++;
   }
-  const parts = [plural(cells.length, 'cell'), `${alarms || 'none'} with alarms`];
-  if (offline) parts.push(`${offline} offline`);
+  const parts = [m.plant_n_cells({ count: cells.length }), alarms ? m.plant_n_with_alarms({ count: fmtNumber(alarms) }) : m.plant_none_with_alarms()];
+  if (offline) parts.push(m.plant_n_offline({ count: fmtNumber(offline) }));
   return parts.join(', ');
 }

@@ -1,7 +1,10 @@
 /**
  * The Process page's plain logic: the ROS names, what the process node's state means for the controls, the
- * status panel's values. No Svelte, no ROS: tests import it directly.
+ * status panel's values. No Svelte, no ROS: tests import it directly. Texts come from messages/process, numbers
+ * in the user's locale.
  */
+import { m } from '$lib/paraglide/messages.js';
+import { fmtNumber, fmtFixed, cellText } from '$lib/core/i18n.js';
 
 export const FEATURE_ID = 'process';
 
@@ -23,15 +26,15 @@ export const FIELD_PERIOD_MS = 5000;
 
 /** @typedef {'idle' | 'running' | 'pausing' | 'paused' | 'stopping' | 'error' | 'unknown'} ProcessStateName */
 
-/** Every state has a label and a tone (colour is never the only signal). */
+/** Every state has a label (in the user's language) and a tone (colour is never the only signal). */
 export const STATE_VIEW = Object.freeze({
-  idle: { tone: 'neutral', label: 'Idle' },
-  running: { tone: 'ok', label: 'Running' },
-  pausing: { tone: 'warn', label: 'Pausing at step end' },
-  paused: { tone: 'warn', label: 'Paused' },
-  stopping: { tone: 'warn', label: 'Stopping' },
-  error: { tone: 'danger', label: 'Error' },
-  unknown: { tone: 'neutral', label: 'Unknown' },
+  idle: { tone: 'neutral', get label() { return m.process_state_idle(); } },
+  running: { tone: 'ok', get label() { return m.process_state_running(); } },
+  pausing: { tone: 'warn', get label() { return m.process_state_pausing(); } },
+  paused: { tone: 'warn', get label() { return m.process_state_paused(); } },
+  stopping: { tone: 'warn', get label() { return m.process_state_stopping(); } },
+  error: { tone: 'danger', get label() { return m.process_state_error(); } },
+  unknown: { tone: 'neutral', get label() { return m.process_state_unknown(); } },
 });
 
 /**
@@ -97,6 +100,20 @@ export function processView(msg, fallbackOperations = []) {
 export const isActive = (s) => s === 'running' || s === 'pausing' || s === 'paused' || s === 'stopping';
 
 /**
+ * Why Start and Run step are off while the process is active ("The process is running").
+ * @param {ProcessStateName} s
+ */
+function busyReason(s) {
+  switch (s) {
+    case 'running': return m.process_busy_running();
+    case 'pausing': return m.process_busy_pausing();
+    case 'paused': return m.process_busy_paused();
+    case 'stopping': return m.process_busy_stopping();
+    default: return m.process_not_running(); // (not active: Start and Run step are not off for this reason)
+  }
+}
+
+/**
  * Which controls apply in a state (before the gates: grant, lease, link). Each is { ok, reason }.
  * @param {ProcessView} v
  * @param {number} selected  the operation chosen for Run step, -1 none
@@ -105,17 +122,18 @@ export function controls(v, selected) {
   const s = v.state;
   const known = s !== 'unknown';
   const why = (/** @type {boolean} */ ok, /** @type {string} */ reason) => (ok ? { ok: true, reason: '' } : { ok: false, reason });
-  const busy = `The process is ${STATE_VIEW[s].label.toLowerCase()}`;
+  const busy = busyReason(s);
+  const waiting = m.process_waiting_node();
   return {
-    start: why(known && !isActive(s), known ? busy : 'Waiting for the process node'),
-    // One toggle: "Pause" while running, "Resume" while paused.
+    start: why(known && !isActive(s), known ? busy : waiting),
+    // One toggle: "Pause" while running, "Resume" while paused (`resume` says which, the label is the user's language).
     toggle: s === 'paused'
-      ? { label: 'Resume', ...why(true, '') }
-      : { label: 'Pause', ...why(s === 'running', s === 'pausing' ? 'Pausing at the end of the step' : 'The process is not running') },
+      ? { resume: true, label: m.process_resume(), ...why(true, '') }
+      : { resume: false, label: m.process_pause(), ...why(s === 'running', s === 'pausing' ? m.process_pausing_at_end() : m.process_not_running()) },
     step: why(known && !isActive(s) && selected >= 0 && selected < v.operations.length,
-      !known ? 'Waiting for the process node' : isActive(s) ? busy : 'Choose an operation first'),
-    stop: why(isActive(s), 'The process is not running'),
-    dryRun: why(known && !isActive(s), known ? 'Change it while the process is stopped' : 'Waiting for the process node'),
+      !known ? waiting : isActive(s) ? busy : m.process_choose_operation_first()),
+    stop: why(isActive(s), m.process_not_running()),
+    dryRun: why(known && !isActive(s), known ? m.process_dry_run_when_stopped() : waiting),
   };
 }
 
@@ -134,18 +152,16 @@ export function needsStartConfirmation(v) {
  */
 export function startQuestion(startConfiguration) {
   const s = String(startConfiguration ?? '').trim();
-  if (s.includes(':')) {
-    return `The robots are not all at their start configurations (${s}). The first moves go there from where the arms are now. Start anyway?`;
-  }
-  return `The robot is not at ${s || 'its start configuration'}. The first move goes there from where the arm is now. Start anyway?`;
+  if (s.includes(':')) return m.process_start_question_groups({ configs: s });
+  return s ? m.process_start_question({ configuration: s }) : m.process_start_question_unnamed();
 }
 
-/** @param {number} s seconds @returns {string} */
+/** @param {number} s seconds @returns {string} "12.3 s", "2 min 5 s" (numbers in the user's locale) */
 export function formatSeconds(s) {
   if (!Number.isFinite(s) || s <= 0) return '–';
-  if (s < 60) return `${s.toFixed(1)} s`;
-  const m = Math.floor(s / 60);
-  return `${m} min ${Math.round(s - m * 60)} s`;
+  if (s < 60) return `${fmtFixed(s, 1)} s`;
+  const min = Math.floor(s / 60);
+  return `${fmtNumber(min)} min ${fmtNumber(Math.round(s - min * 60))} s`;
 }
 
 /**
@@ -158,13 +174,14 @@ export function formatSeconds(s) {
 export function cycleTimeText(activeS, elapsedS) {
   const active = formatSeconds(activeS);
   const elapsed = formatSeconds(elapsedS);
-  return elapsedS > activeS && elapsed !== active ? `${active} (${elapsed} with pauses)` : active;
+  return elapsedS > activeS && elapsed !== active ? m.process_with_pauses({ active, elapsed }) : active;
 }
 
 /** @param {ProcessView} v @returns {string} "Cycle 2 of 5" / "Cycle 2" / "Not started" */
 export function cycleText(v) {
-  if (v.cycle <= 0) return 'Not started';
-  return v.cyclesTarget > 0 ? `Cycle ${v.cycle} of ${v.cyclesTarget}` : `Cycle ${v.cycle}`;
+  if (v.cycle <= 0) return m.process_not_started();
+  const cycle = fmtNumber(v.cycle);
+  return v.cyclesTarget > 0 ? m.process_cycle_of({ cycle, target: fmtNumber(v.cyclesTarget) }) : m.process_cycle_n({ cycle });
 }
 
 /**
@@ -186,8 +203,8 @@ export function fieldAt(msg, path) {
 export function formatValue(v, unit) {
   let t;
   if (v === undefined || v === null) return '–';
-  if (typeof v === 'number') t = Number.isInteger(v) ? String(v) : v.toFixed(Math.abs(v) >= 100 ? 1 : 2);
-  else if (typeof v === 'boolean') t = v ? 'yes' : 'no';
+  if (typeof v === 'number') t = Number.isInteger(v) ? fmtNumber(v, { useGrouping: false }) : fmtFixed(v, Math.abs(v) >= 100 ? 1 : 2);
+  else if (typeof v === 'boolean') t = v ? m.process_yes() : m.process_no();
   else if (typeof v === 'object') t = JSON.stringify(v);
   else t = String(v);
   return unit ? `${t} ${unit}` : t;
@@ -200,4 +217,28 @@ export function parseCycles(v) {
   if (!/^\d+$/.test(s)) return NaN;
   const n = Number(s);
   return n <= 100000 ? n : NaN;
+}
+
+/**
+ * An operation as the page shows it: its title from the cell file (a text per language, `process.operations[].title`)
+ * in the user's language, else its name. The node's state and the cell file name operations alike.
+ * @param {unknown} name  the operation's name
+ * @param {Record<string, unknown>} [titles]  title by name (/api/config features.process.titles)
+ * @returns {string}
+ */
+export function operationText(name, titles = {}) {
+  if (typeof name === 'string' && titles && Object.hasOwn(titles, name)) return cellText(titles[name]) || name;
+  return cellText(name);
+}
+
+/**
+ * A cell-file text as an attribute value that does not depend on the language (its English, else any).
+ * @param {unknown} text @returns {string}
+ */
+export function rawText(text) {
+  if (typeof text === 'string') return text;
+  if (!text || typeof text !== 'object') return '';
+  const byLang = /** @type {Record<string, unknown>} */ (text);
+  const v = typeof byLang.en === 'string' ? byLang.en : Object.values(byLang).find((x) => typeof x === 'string');
+  return typeof v === 'string' ? v : '';
 }

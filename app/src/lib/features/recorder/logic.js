@@ -7,7 +7,10 @@
  * GET /api/recorder/recordings/:name -> the recording with its window, topics and timeline,
  * GET /api/recorder/recordings/:name/file -> the MCAP file (a download), DELETE /api/recorder/recordings/:name.
  * ROS: /cell/recorder/state (cell_msgs/RecorderState, latched), /cell/recorder/save (std_srvs/Trigger).
+ * Texts come from messages/recorder, numbers in the user's locale.
  */
+import { m } from '$lib/paraglide/messages.js';
+import { fmtNumber } from '$lib/core/i18n.js';
 import { request } from '../../core/api.js';
 import { formatBytes, formatDate } from '../database/logic.js';
 
@@ -65,8 +68,11 @@ const MINUS = '\u2212';
 /** @param {any} v */
 const num = (v) => (typeof v === 'number' && Number.isFinite(v) ? v : null);
 
+/** A number with one decimal at most ("120", "1.5"; "1,5" in Spanish). @param {number} v */
+const tenths = (v) => fmtNumber(v, { maximumFractionDigits: 1, useGrouping: false });
+
 /** "120 s", "1.5 s" (one decimal at most). @param {number} s */
-const seconds = (s) => `${Number(s.toFixed(1))} s`;
+const seconds = (s) => `${tenths(s)} s`;
 
 /**
  * A time relative to the alarm, to a tenth of a second: "−3.2 s", "0 s", "+10 s".
@@ -74,10 +80,9 @@ const seconds = (s) => `${Number(s.toFixed(1))} s`;
  */
 export function formatRelative(deltaMs) {
   if (typeof deltaMs !== 'number' || !Number.isFinite(deltaMs)) return '—';
-  const tenths = Math.round(Math.abs(deltaMs) / 100);
-  if (tenths === 0) return '0 s';
-  const abs = tenths / 10;
-  return `${deltaMs < 0 ? MINUS : '+'}${Number.isInteger(abs) ? abs : abs.toFixed(1)} s`;
+  const n = Math.round(Math.abs(deltaMs) / 100);
+  if (n === 0) return '0 s';
+  return `${deltaMs < 0 ? MINUS : '+'}${tenths(n / 10)} s`;
 }
 
 /** "9.5 s", "2 min 10 s", "1 h 5 min"; '—' when unknown or negative. @param {number | null | undefined} s */
@@ -85,9 +90,10 @@ export function formatDuration(s) {
   if (typeof s !== 'number' || !Number.isFinite(s) || s < 0) return '—';
   if (s < 60) return seconds(s);
   const total = Math.round(s);
-  const h = Math.floor(total / 3600), m = Math.floor((total % 3600) / 60), sec = total % 60;
-  if (h > 0) return m ? `${h} h ${m} min` : `${h} h`;
-  return sec ? `${m} min ${sec} s` : `${m} min`;
+  const h = Math.floor(total / 3600), min = Math.floor((total % 3600) / 60), sec = total % 60;
+  const n = (/** @type {number} */ v) => fmtNumber(v);
+  if (h > 0) return min ? `${n(h)} h ${n(min)} min` : `${n(h)} h`;
+  return sec ? `${n(min)} min ${n(sec)} s` : `${n(min)} min`;
 }
 
 /** A ROS time ({secs, nsecs}, or {sec, nanosec}) in ms since the epoch; null when unset (0). @param {any} t */
@@ -131,13 +137,14 @@ export function stateView(msg) {
  */
 export function pendingText(st, nowMs) {
   if (!st?.pending) return '';
-  if (st.pendingUntilMs === null) return `Saving a recording (${st.pending}) soon`;
+  const reason = st.pending;
+  if (st.pendingUntilMs === null) return m.recorder_pending_soon({ reason });
   const left = Math.max(0, Math.ceil((st.pendingUntilMs - nowMs) / 1000));
-  return left > 0 ? `Saving a recording (${st.pending}) in ${left} s` : `Saving a recording (${st.pending}) now`;
+  return left > 0 ? m.recorder_pending_in({ reason, seconds: fmtNumber(left) }) : m.recorder_pending_now({ reason });
 }
 
 /** The role=alert text for the node's last save error ('' none). @param {RecorderStateView | null | undefined} st */
-export const saveErrorText = (st) => (st?.error ? `The last recording could not be saved: ${st.error}` : '');
+export const saveErrorText = (st) => (st?.error ? m.recorder_save_error({ error: st.error }) : '');
 
 /**
  * What a recording holds, from the cell file's section (/api/config features.recorder):
@@ -147,10 +154,11 @@ export const saveErrorText = (st) => (st?.error ? `The last recording could not 
 export function windowText(section) {
   const before = num(section?.before_s) ?? DEFAULT_BEFORE_S;
   const after = num(section?.after_s) ?? DEFAULT_AFTER_S;
-  const which = section?.severity === 'warning' ? 'error or warning alarm' : 'error alarm';
-  return after > 0
-    ? `Each ${which} saves the ${seconds(before)} before it and the ${seconds(after)} after it.`
-    : `Each ${which} saves the ${seconds(before)} before it.`;
+  const b = seconds(before), a = seconds(after);
+  if (section?.severity === 'warning') {
+    return after > 0 ? m.recorder_window_warning({ before: b, after: a }) : m.recorder_window_warning_before({ before: b });
+  }
+  return after > 0 ? m.recorder_window_error({ before: b, after: a }) : m.recorder_window_error_before({ before: b });
 }
 
 // ---- the list ----
@@ -172,8 +180,11 @@ export const detailsKnown = (r) => !!r?.reason || (Number(r?.messages) || 0) > 0
  * @property {string} messages  "1,234 messages", '' when unknown
  * @property {boolean} known
  * @property {boolean} isAlarm
- * @property {'Alarm' | 'Saved'} marker  the timeline's label at at_ms
+ * @property {string} marker  the timeline's label at at_ms: "Alarm" or "Saved" (in the user's language)
  */
+
+/** The timeline's label at the alarm (or the save request). @param {boolean} isAlarm */
+export const markerText = (isAlarm) => (isAlarm ? m.recorder_marker_alarm() : m.recorder_marker_saved());
 
 /** One row of the list. @param {Recording} r @returns {RecordingView} */
 export function recordingView(r) {
@@ -183,13 +194,13 @@ export function recordingView(r) {
   return {
     name: r.name,
     when: formatDate(r.at_ms),
-    why: r.reason || 'Reason unknown',
+    why: r.reason || m.recorder_reason_unknown(),
     duration: known ? formatDuration(r.duration_s) : '—',
     size: formatBytes(r.size),
-    messages: known ? `${n.toLocaleString('en-GB')} ${n === 1 ? 'message' : 'messages'}` : '',
+    messages: known ? m.recorder_n_messages({ count: n, n: fmtNumber(n) }) : '',
     known,
     isAlarm,
-    marker: isAlarm ? 'Alarm' : 'Saved',
+    marker: markerText(isAlarm),
   };
 }
 
@@ -206,8 +217,8 @@ export function chooseSelected(list, current, pinned) {
 /** The confirmation before a delete. @param {RecordingView} v */
 export function deleteQuestion(v) {
   return {
-    title: `Delete the recording of ${v.when}?`,
-    message: `${v.name} (${v.size}) is deleted from the robot PC. This cannot be undone.`,
+    title: m.recorder_delete_title({ when: v.when }),
+    message: m.recorder_delete_message({ name: v.name, size: v.size }),
   };
 }
 
@@ -362,7 +373,20 @@ export function axisTicks(startMs, endMs, atMs, widthPx = 320) {
  */
 
 /** What the events list says for a value. @param {string} laneId @param {string} text */
-export const eventLabel = (laneId, text) => (text ? text : laneId === 'alarms' ? 'No active alarm' : 'No value');
+export const eventLabel = (laneId, text) => (text ? text : laneId === 'alarms' ? m.recorder_no_active_alarm() : m.recorder_no_value());
+
+/**
+ * A lane's title in the user's language (the recorder names its three lanes in English); another lane by its own.
+ * @param {{ id: string, title?: string }} lane
+ */
+export function laneTitle(lane) {
+  switch (lane?.id) {
+    case 'alarms': return m.recorder_lane_alarms();
+    case 'process': return m.recorder_lane_process();
+    case 'mode': return m.recorder_lane_mode();
+    default: return lane?.title || lane?.id || '';
+  }
+}
 
 /**
  * Every change of every lane, by time (lanes in their order at the same time): the text record of the timeline.
@@ -377,7 +401,7 @@ export function timelineEvents(d) {
       if (!c || num(c.t_ms) === null) continue;
       const text = typeof c.text === 'string' ? c.text : '';
       all.push({
-        t_ms: c.t_ms, rel: formatRelative(c.t_ms - d.at_ms), lane: lane.id, laneTitle: lane.title || lane.id,
+        t_ms: c.t_ms, rel: formatRelative(c.t_ms - d.at_ms), lane: lane.id, laneTitle: laneTitle(lane),
         text, label: eventLabel(lane.id, text), tone: laneTone(lane.id, text), order: li,
       });
     }
@@ -392,14 +416,17 @@ export function timelineEvents(d) {
  * @param {RecordingDetail} d
  */
 export function timelineSummary(d) {
-  const marker = isAlarmRecording(d) ? 'Alarm' : 'Saved';
   const lanes = Array.isArray(d?.timeline?.lanes) ? d.timeline.lanes : [];
   const counts = lanes.map((l) => {
     const n = Array.isArray(l.changes) ? l.changes.length : 0;
-    return `${l.title || l.id}: ${n} ${n === 1 ? 'change' : 'changes'}`;
+    return m.recorder_summary_lane({ count: n, lane: laneTitle(l), n: fmtNumber(n) });
   });
-  const window = hasWindow(d) ? ` From ${formatRelative(d.start_ms - d.at_ms)} to ${formatRelative(d.end_ms - d.at_ms)}.` : '';
-  return `${marker} at ${formatDate(d.at_ms)}.${window}${counts.length ? ` ${counts.join(', ')}.` : ''} The list of events below has every change.`;
+  return [
+    m.recorder_summary_at({ marker: markerText(isAlarmRecording(d)), when: formatDate(d.at_ms) }),
+    ...(hasWindow(d) ? [m.recorder_summary_window({ from: formatRelative(d.start_ms - d.at_ms), to: formatRelative(d.end_ms - d.at_ms) })] : []),
+    ...(counts.length ? [`${counts.join(', ')}.`] : []),
+    m.recorder_summary_tail(),
+  ].join(' ');
 }
 
 /** Topics, most messages first, then by name. @param {TopicInfo[] | undefined} topics @returns {TopicInfo[]} */

@@ -1,7 +1,11 @@
 /**
  * The Routines page's plain logic: ROS names, the draft being recorded (add, delete, reorder), step texts, name
- * rules (the node checks them too), and the run state. No Svelte, no ROS: tests import it directly.
+ * rules (the node checks them too), and the run state. No Svelte, no ROS: tests import it directly. The texts come
+ * from messages/routines, the numbers in the user's locale.
  */
+
+import { m } from '$lib/paraglide/messages.js';
+import { fmtFixed } from '../../core/i18n.js';
 
 export const FEATURE_ID = 'routines';
 
@@ -48,13 +52,13 @@ export function normalizeStep(s) {
 }
 
 /** @param {number} x @param {number} [d] */
-const fixed = (x, d = 1) => (Number.isFinite(x) ? x.toFixed(d) : '?');
+const fixed = (x, d = 1) => (Number.isFinite(x) ? fmtFixed(x, d) : '?');
 
 /** "Pose: x 412.3, y -120.0, z 230.5 mm" or "Gripper close". @param {Step} s */
 export function stepText(s) {
   if (s.kind === 'action') return `${capitalize(s.tool)} ${s.action}`.trim();
   const [x, y, z] = s.pose.map((v) => v * 1000);
-  return `Pose: x ${fixed(x)}, y ${fixed(y)}, z ${fixed(z)} mm`;
+  return m.routines_step_pose({ x: fixed(x), y: fixed(y), z: fixed(z) });
 }
 
 /** @param {string} s */
@@ -83,10 +87,10 @@ export function moveStep(steps, i, by) {
  */
 export function nameProblem(name, existing = []) {
   const n = name.trim();
-  if (!n) return 'Give the routine a name';
-  if (n.length > 64) return 'At most 64 characters';
-  if (!/^[A-Za-z0-9_\-. ]+$/.test(n) || n.startsWith('.')) return 'Use letters a-z, digits, space, - _ . (no / or \\)';
-  if (existing.includes(n)) return `A routine named '${n}' exists already`;
+  if (!n) return m.routines_name_missing();
+  if (n.length > 64) return m.routines_name_too_long();
+  if (!/^[A-Za-z0-9_\-. ]+$/.test(n) || n.startsWith('.')) return m.routines_name_chars();
+  if (existing.includes(n)) return m.routines_name_exists({ name: n });
   return '';
 }
 
@@ -118,7 +122,12 @@ export function routineSummary(r) {
   if (r.error) return r.error;
   const poses = r.steps.filter((s) => s.kind === 'pose').length;
   const actions = r.steps.length - poses;
-  const parts = [`${r.steps.length} step${r.steps.length === 1 ? '' : 's'}: ${poses} pose${poses === 1 ? '' : 's'}, ${actions} action${actions === 1 ? '' : 's'}`];
+  /** @type {string[]} */
+  const parts = [m.routines_summary_counts({
+    steps: m.routines_n_steps({ count: r.steps.length }),
+    poses: m.routines_n_poses({ count: poses }),
+    actions: m.routines_n_actions({ count: actions }),
+  })];
   if (r.group) parts.push(r.group);
   if (r.tool) parts.push(r.tool);
   return parts.join(' · ');
@@ -127,10 +136,10 @@ export function routineSummary(r) {
 /**
  * @typedef {{ name: string, state: 'idle' | 'running' | 'stopping', step: number, total: number, message: string }} RunView
  */
-/** @param {any} m  cell_msgs/RoutineRunState @returns {RunView} */
-export function runView(m) {
-  const state = m?.state === 'running' || m?.state === 'stopping' ? m.state : 'idle';
-  return { name: String(m?.name ?? ''), state, step: Number(m?.step) || 0, total: Number(m?.total) || 0, message: String(m?.message ?? '') };
+/** @param {any} msg  cell_msgs/RoutineRunState @returns {RunView} */
+export function runView(msg) {
+  const state = msg?.state === 'running' || msg?.state === 'stopping' ? msg.state : 'idle';
+  return { name: String(msg?.name ?? ''), state, step: Number(msg?.step) || 0, total: Number(msg?.total) || 0, message: String(msg?.message ?? '') };
 }
 
 /**

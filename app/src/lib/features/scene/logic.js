@@ -4,6 +4,8 @@
  * The cell frame is ROS's: x forward, y left, z up (the view keeps it; its camera's up is +z).
  */
 
+import { m } from '$lib/paraglide/messages.js';
+import { fmtFixed, fmtNumber } from '../../core/i18n.js';
 import { TfTree, baseToPose, compose, frameId } from './tf.js';
 
 export const JOINT_STATE_TYPE = 'sensor_msgs/JointState';
@@ -101,8 +103,8 @@ export function urdfJoints(doc) {
 export function parseUrdf(text) {
   const doc = new DOMParser().parseFromString(text, 'application/xml');
   const err = doc.getElementsByTagName('parsererror')[0];
-  if (err) throw new Error(`the URDF is not valid XML: ${(err.textContent ?? '').trim().split('\n')[0].slice(0, 160)}`);
-  if (doc.documentElement?.tagName !== 'robot') throw new Error(`the URDF's root element is <${doc.documentElement?.tagName}>, not <robot>`);
+  if (err) throw new Error(m.scene_urdf_not_xml({ detail: (err.textContent ?? '').trim().split('\n')[0].slice(0, 160) }));
+  if (doc.documentElement?.tagName !== 'robot') throw new Error(m.scene_urdf_root({ tag: String(doc.documentElement?.tagName) }));
   return doc;
 }
 
@@ -143,7 +145,8 @@ export function staleness(at, now, staleAfterS) {
 }
 
 /** @param {number | null} ageS */
-export const staleText = (ageS) => (ageS == null ? 'No joint states yet' : `Stale: joint states ${ageS < 10 ? ageS.toFixed(1) : Math.round(ageS)} s old`);
+export const staleText = (ageS) =>
+  ageS == null ? m.scene_no_joint_states() : m.scene_stale({ age: ageS < 10 ? fmtFixed(ageS, 1) : fmtNumber(Math.round(ageS)) });
 
 // visualization_msgs/Marker types and actions this view draws.
 export const MARKER = { CUBE: 1, SPHERE: 2, CYLINDER: 3, ADD: 0, DELETE: 2, DELETEALL: 3 };
@@ -267,7 +270,7 @@ export function presetPose(name, center, radius, fovDeg, aspect) {
 }
 
 /** @param {number} v rad @returns {string} */
-export const formatJoint = (v) => `${v.toFixed(3)} rad (${((v * 180) / Math.PI).toFixed(1)}°)`;
+export const formatJoint = (v) => `${fmtFixed(v, 3)} rad (${fmtFixed((v * 180) / Math.PI, 1)}°)`;
 
 /**
  * A routine's recorded TCP poses as a path to draw: the positions (base frame of its group's arm) of its pose steps.

@@ -10,6 +10,7 @@ import { ColladaLoader } from 'three/examples/jsm/loaders/ColladaLoader.js';
 import { OBJLoader } from 'three/examples/jsm/loaders/OBJLoader.js';
 import URDFLoader from 'urdf-loader';
 import { presetPose } from './logic.js';
+import { m } from '$lib/paraglide/messages.js';
 
 const STALE_COLOR = new THREE.Color(0x8a8f98);
 const GHOST_COLOR = new THREE.Color(0xf59e0b);
@@ -78,7 +79,7 @@ export class SceneViewer {
     this.renderer.setClearColor(0xe9edf2);
     const canvas = this.renderer.domElement;
     canvas.setAttribute('role', 'img');
-    canvas.setAttribute('aria-label', o.label ?? '3D view of the cell');
+    canvas.setAttribute('aria-label', o.label ?? m.scene_title_cell());
     canvas.style.display = 'block';
     canvas.style.touchAction = 'none';
     host.appendChild(canvas);

@@ -8,7 +8,10 @@
  *     fields?: ['wrench.force.x', ...], labels?: ['Fx', ...],          time-series: n named variables
  *     x?: 'x', y?: 'y', labels?: ['x (mm)', 'y (mm)'],                 scatter: an x list and a y list
  *     limits?: { min, max } | { xmin, xmax, ymin, ymax }, window_s? }
+ * The title and the labels are the cell file's texts: a string, or one per language ({ en, es, ... }); shown through
+ * cellText.
  */
+import { cellText, fmtFixed } from '../../core/i18n.js';
 
 export const FEATURE_ID = 'sensors';
 /** The rolling window when the cell file gives none. */
@@ -22,17 +25,22 @@ export const STALE_AFTER_MS = 2000;
 /**
  * @typedef {object} GraphSpec
  * @property {string} key  unique per page (index + topic)
- * @property {string} title
+ * @property {CellText} title  the cell file's (the topic when it gives none)
  * @property {'time-series' | 'scatter'} kind
  * @property {string} topic
  * @property {string} type
  * @property {string[]} fields  time-series: the field paths (empty: every numeric field of the message)
- * @property {string[]} labels
+ * @property {CellText[]} labels  the cell file's ('' for none)
  * @property {string} x  scatter: the x list's field
  * @property {string} y  scatter: the y list's field
  * @property {{ xmin?: number, xmax?: number, ymin?: number, ymax?: number }} limits
  * @property {number} windowMs
  */
+
+/** @typedef {string | Record<string, string>} CellText  a cell-file text: one for all, or one per language */
+
+/** A cell-file text as given (a non-empty string or a per-language object), else null. @param {unknown} v @returns {CellText | null} */
+const cellTextOf = (v) => (typeof v === 'string' ? (v ? v : null) : v && typeof v === 'object' && !Array.isArray(v) ? /** @type {Record<string, string>} */ (v) : null);
 
 /** @param {unknown} v */
 const num = (v) => (typeof v === 'number' && Number.isFinite(v) ? v : undefined);
@@ -58,12 +66,12 @@ export function graphSpecs(section) {
     const windowS = num(g.window_s) && g.window_s > 0 ? g.window_s : DEFAULT_WINDOW_S;
     out.push({
       key: `${i}:${g.topic}`,
-      title: typeof g.title === 'string' && g.title ? g.title : g.topic,
+      title: cellTextOf(g.title) ?? g.topic,
       kind,
       topic: g.topic,
       type: typeof g.type === 'string' ? g.type : '',
       fields: Array.isArray(g.fields) ? g.fields.filter((/** @type {unknown} */ f) => typeof f === 'string' && f) : [],
-      labels: Array.isArray(g.labels) ? g.labels.map((/** @type {unknown} */ s) => (typeof s === 'string' ? s : '')) : [],
+      labels: Array.isArray(g.labels) ? g.labels.map((/** @type {unknown} */ s) => cellTextOf(s) ?? '') : [],
       x: typeof g.x === 'string' && g.x ? g.x : 'x',
       y: typeof g.y === 'string' && g.y ? g.y : 'y',
       limits,
@@ -137,7 +145,7 @@ export function seriesLayout(spec, msg) {
       cols.push({ path: f, index: null, name: shortName(f) });
     }
   }
-  const names = cols.map((c, i) => spec.labels[i] || c.name);
+  const names = cols.map((c, i) => cellText(spec.labels[i]) || c.name);
   const getters = cols.map((c) => {
     const parts = c.path.split(/[.[\]]+/).filter(Boolean);
     return (/** @type {any} */ m) => {
@@ -372,9 +380,13 @@ export function scatterPoints(msg, xField, yField, max = 2000, out = []) {
 export function formatValue(v) {
   if (!Number.isFinite(v)) return '—';
   const a = Math.abs(v);
-  if (a < 5e-4) return '0.000';
-  if (a >= 1e5) return v.toExponential(2);
-  return v.toFixed(a >= 100 ? 1 : a >= 10 ? 2 : 3);
+  if (a < 5e-4) return fmtFixed(0, 3);
+  if (a >= 1e5) {
+    // "2.50e+6": the mantissa in the user's locale, the exponent as written in code.
+    const [mantissa, exponent] = v.toExponential(2).split('e');
+    return `${fmtFixed(Number(mantissa), 2)}e${exponent}`;
+  }
+  return fmtFixed(v, a >= 100 ? 1 : a >= 10 ? 2 : 3);
 }
 
 /**

@@ -3,6 +3,8 @@
  * ("26–50 of 230"), and how an entry's outcome looks. The log is newest first (bff/src/core/audit/audit-log.js);
  * filters match exactly (user, op, outcome).
  */
+import { m } from '$lib/paraglide/messages.js';
+import { fmtNumber, fmtDateTime } from '$lib/core/i18n.js';
 import { request } from '../../core/api.js';
 
 /** Entries per page. */
@@ -45,6 +47,9 @@ export function auditQuery(f, offset, limit = PAGE_SIZE) {
 /** @param {AuditFilters} f @param {number} offset @param {number} [limit] */
 export const fetchAudit = (f, offset, limit = PAGE_SIZE) => request('GET', `/api/audit?${auditQuery(f, offset, limit)}`);
 
+/** A count as the position line shows it. @param {number} n */
+export const count = (n) => fmtNumber(n, { useGrouping: false });
+
 /**
  * Where a page sits in the log.
  * @param {number} total @param {number} offset @param {number} shown  entries on this page
@@ -61,25 +66,28 @@ export function pageInfo(total, offset, shown, limit = PAGE_SIZE) {
     hasOlder: to < total,
     newerOffset: Math.max(0, offset - limit),
     olderOffset: offset + limit,
-    text: total === 0 ? 'No entries' : shown === 0 ? `Past the end (${total} entries)` : `${from}–${to} of ${total}, newest first`,
+    // (counts without grouping: the position reads "26–50 of 1230" in every language)
+    text: total === 0 ? m.system_audit_no_entries()
+      : shown === 0 ? m.system_audit_past_end({ total: count(total) })
+      : m.system_audit_position({ from: count(from), to: count(to), total: count(total) }),
   };
 }
 
 /** Whether any filter is set. @param {AuditFilters} f */
 export const filtered = (f) => !!(f.user.trim() || f.op.trim() || f.outcome);
 
-/** An outcome as colour and label. @param {string} o */
+/** An outcome as colour and label (in the user's language). @param {string} o */
 export function outcomeView(o) {
-  if (o === 'ok') return { tone: 'ok', label: 'OK' };
-  if (o === 'denied') return { tone: 'warn', label: 'Denied' };
-  if (o === 'failed') return { tone: 'danger', label: 'Failed' };
-  return { tone: 'neutral', label: o || 'unknown' };
+  if (o === 'ok') return { tone: 'ok', label: m.system_outcome_ok() };
+  if (o === 'denied') return { tone: 'warn', label: m.system_outcome_denied() };
+  if (o === 'failed') return { tone: 'danger', label: m.system_outcome_failed() };
+  return { tone: 'neutral', label: o || m.system_outcome_unknown() };
 }
 
-/** "22 Nov 2026 14:03:21" (local). @param {string | undefined} iso */
+/** An entry's date and time in the user's locale, with seconds ("22 Nov 2026, 14:03:21" in Spanish). @param {string | undefined} iso */
 export function auditTime(iso) {
   if (!iso) return '—';
   const d = new Date(iso);
   if (Number.isNaN(d.getTime())) return iso;
-  return `${d.toLocaleDateString('en-GB', { day: 'numeric', month: 'short', year: 'numeric' })} ${d.toLocaleTimeString('en-GB', { hour: '2-digit', minute: '2-digit', second: '2-digit' })}`;
+  return fmtDateTime(d);
 }

@@ -180,6 +180,13 @@ def _name(value: Any, where: str) -> str:
     return value.strip()
 
 
+def _shown(value: Any, where: str) -> str:
+    """A text the page shows: a string, or one per language ({en: ..., es: ...}); the node keeps the English."""
+    if isinstance(value, dict):
+        return _name(value.get("en"), f"{where}.en")
+    return _name(value, where)
+
+
 def _text(raw: Mapping[str, Any], where: str, key: str = "text") -> str:
     value = raw.get(key, "")
     if not isinstance(value, str):
@@ -353,9 +360,10 @@ def parse_process(section: Optional[Mapping[str, Any]], manual_section: Optional
         where = f"process.operations[{i}]"
         if not isinstance(op, dict):
             raise ConfigError(f"{where}: expected an operation {{name, steps}}, got {op!r}")
-        extra = [k for k in op if k not in ("name", "steps")]
+        # title: what the page shows (per language); the node and its log use the name.
+        extra = [k for k in op if k not in ("name", "title", "steps")]
         if extra:
-            raise ConfigError(f"{where}: unknown key {extra[0]!r} (an operation has: name, steps)")
+            raise ConfigError(f"{where}: unknown key {extra[0]!r} (an operation has: name, title, steps)")
         name = _name(op.get("name"), f"{where}.name")
         if name in (o.name for o in operations):
             raise ConfigError(f"{where}.name: {name!r} is used twice")
@@ -372,7 +380,7 @@ def parse_process(section: Optional[Mapping[str, Any]], manual_section: Optional
         where = f"process.status_fields[{i}]"
         if not isinstance(f, dict):
             raise ConfigError(f"{where}: expected {{label, topic, field, unit}}")
-        fields.append(StatusField(_name(f.get("label"), f"{where}.label"), _name(f.get("topic"), f"{where}.topic"),
+        fields.append(StatusField(_shown(f.get("label"), f"{where}.label"), _name(f.get("topic"), f"{where}.topic"),
                                   str(f.get("field") or ""), str(f.get("unit") or "")))
 
     def opt(key: str, positive: bool = True) -> float:

@@ -1,0 +1,82 @@
+// The operator's language, through the real page and BFF: a browser that asks for Spanish gets the login form and
+// the Process page in Spanish, with Spanish number formats and the cell file's Spanish operation titles; a language
+// chosen in the user menu is kept with the account, so a new login on another device shows it.
+import { test, expect } from '@playwright/test';
+import { openMenu, users } from '../lib/app.js';
+
+test.use({ locale: 'es-ES' });
+
+/** @param {import('@playwright/test').Page} page @param {string} who @param {RegExp | string} submit the Sign in button's name */
+async function signIn(page, who, submit) {
+  await page.goto('/login');
+  await page.getByTestId('login-username').fill(who);
+  await page.getByTestId('login-password').fill(users()[who]);
+  await page.getByRole('button', { name: submit }).click();
+  await expect(page).not.toHaveURL(/\/login/);
+}
+
+/** The account back to "the browser's language", so the other specs find their English operator. */
+async function forgetLanguage(baseURL) {
+  const login = await fetch(`${baseURL}/api/auth/login`, {
+    method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ username: 'operator', password: users().operator }),
+  });
+  const cookie = (login.headers.get('set-cookie') || '').split(';')[0];
+  const res = await fetch(`${baseURL}/api/auth/me/preferences`, { method: 'PUT', headers: { cookie, 'content-type': 'application/json' }, body: '{"locale":null}' });
+  expect(res.status).toBe(200);
+}
+
+test.afterEach(async ({ baseURL }) => forgetLanguage(baseURL));
+
+test('a Spanish browser gets the app in Spanish: login, Process page, numbers and the cell file\'s operation titles', async ({ page }) => {
+  await page.goto('/login');
+  await expect(page.locator('html')).toHaveAttribute('lang', 'es');
+  await expect(page.getByTestId('page-title')).toHaveText('Iniciar sesión');
+  await expect(page.getByText('Usuario', { exact: true })).toBeVisible();
+
+  // A wrong password: the BFF's refusal is said in Spanish (its code, not its English sentence).
+  await page.getByTestId('login-username').fill('operator');
+  await page.getByTestId('login-password').fill('not the password');
+  await page.getByRole('button', { name: 'Iniciar sesión' }).click();
+  await expect(page.getByTestId('login-error')).toHaveText('Usuario o contraseña incorrectos');
+
+  await signIn(page, 'operator', 'Iniciar sesión');
+  await page.goto('/process');
+  await expect(page.getByTestId('page-title')).toHaveText('Proceso');
+  // The cell file gives the operations a Spanish title; the node still knows them by their names.
+  const ops = page.getByTestId('operation');
+  await expect(ops.first()).toContainText('Recoger pieza');
+  await expect(ops.last()).toContainText('Volver a inicio');
+  // A status field: its Spanish label from the cell file, its value with a decimal comma.
+  const force = page.getByTestId('status-field').filter({ hasText: 'Fuerza de muñeca Z' });
+  await expect(force.getByTestId('status-value')).toHaveText(/^-?\d+,\d+\s*N$/, { timeout: 20_000 });
+});
+
+test('a language chosen in the user menu is kept with the account: a new login elsewhere shows it', async ({ page, browser }) => {
+  await signIn(page, 'operator', 'Iniciar sesión');
+  await page.goto('/process');
+  await expect(page.getByTestId('page-title')).toHaveText('Proceso');
+  await openMenu(page);
+  const settings = page.getByTestId('display-settings');
+  await settings.getByText('Pantalla e idioma').click();
+  await settings.getByRole('combobox', { name: 'Idioma' }).selectOption('fi');
+  // The page is drawn again in Finnish.
+  await expect(page.getByTestId('page-title')).toHaveText('Prosessi');
+  await expect(page.locator('html')).toHaveAttribute('lang', 'fi');
+
+  // Another device, whose browser asks for Spanish: the account's Finnish wins after the login.
+  const other = await browser.newContext({ locale: 'es-ES' });
+  try {
+    const p2 = await other.newPage();
+    await signIn(p2, 'operator', 'Iniciar sesión');
+    await p2.goto('/process');
+    await expect(p2.getByTestId('page-title')).toHaveText('Prosessi');
+    await expect(p2.getByTestId('operation').first()).toContainText('Poimi kappale');
+    // Logged out, the login page follows that browser again.
+    await openMenu(p2);
+    await p2.getByRole('button', { name: 'Kirjaudu ulos' }).click();
+    await p2.reload();
+    await expect(p2.getByTestId('page-title')).toHaveText('Iniciar sesión');
+  } finally {
+    await other.close();
+  }
+});
