@@ -15,8 +15,8 @@ const THEMES = ['light', 'dark', 'contrast'];
 const results = {};
 
 test.afterAll(async ({}, info) => {
-  fs.mkdirSync(path.join(info.project.outputDir, '..'), { recursive: true });
-  fs.writeFileSync(path.join(info.project.outputDir, '..', `a11y-${info.project.name}.json`), JSON.stringify(results, null, 1));
+  fs.mkdirSync(info.project.outputDir, { recursive: true });
+  fs.writeFileSync(path.join(info.project.outputDir, `a11y-${info.project.name}.json`), JSON.stringify(results, null, 1));
 });
 
 /** @param {import('@playwright/test').Page} page @param {{theme: string, glove?: boolean}} display */

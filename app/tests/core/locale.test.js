@@ -70,6 +70,27 @@ describe('errors from the BFF', () => {
     expect(errorText({ code: 'toString' })).toBe('');
     expect(errorText(null)).toBe('');
   });
+  it('database: a wrong extension and a malformed CSV, in Spanish; a file without an extension has its own sentence', () => {
+    speak('es');
+    expect(errorText({ error: 'parts.csv needs a .csv file, not .txt', code: 'database.bad_extension', params: { file: 'parts.csv', expected: '.csv', got: '.txt' } }))
+      .toBe('parts.csv necesita un archivo .csv, no .txt.');
+    expect(errorText({ error: 'parts.csv needs a .csv file, not one without extension', code: 'database.bad_extension', params: { file: 'parts.csv', expected: '.csv', got: '' } }))
+      .toBe('parts.csv necesita un archivo .csv, no uno sin extensión.');
+    expect(errorText({
+      error: 'parts.csv not replaced: CSV line 2 has 3 columns, expected 2 (as in the first line)',
+      code: 'database.csv_columns', params: { file: 'parts.csv', line: 2, columns: 3, expected: 2 },
+    })).toBe('parts.csv no se sustituyó: el número de columnas de la línea 2 del CSV es 3 y debería ser 2 (como en la primera línea).');
+  });
+  it('scene: a ROS master that does not answer, in German', () => {
+    speak('de');
+    expect(errorText({ error: 'the ROS master at http://cell:11311 does not answer: the URDF parameter cannot be read', code: 'scene.master_down', params: { master: 'http://cell:11311' } }))
+      .toBe('Der ROS-Master unter http://cell:11311 antwortet nicht: Der URDF-Parameter kann nicht gelesen werden.');
+  });
+  it('recorder: a role that may not delete, in German', () => {
+    speak('de');
+    expect(errorText({ error: 'role operator may not delete recordings', code: 'recorder.delete_denied', params: { role: 'operator' } }))
+      .toBe('Ihre Rolle (operator) darf keine Aufzeichnungen löschen.');
+  });
 });
 
 describe("the account's language", () => {

@@ -127,8 +127,12 @@ test('lists targets, drives and drive files; symlinks leading outside the drive 
 
     const sub = await t.req('GET', `/api/database/drives/${encodeURIComponent(t.driveId)}/files?path=export`);
     assert.deepEqual(sub.data.entries.map((e) => e.name), ['PARTS.CSV']);
-    assert.equal((await t.req('GET', `/api/database/drives/${encodeURIComponent(t.driveId)}/files?path=nothere`)).status, 404);
-    assert.equal((await t.req('GET', '/api/database/drives/9:NOPE/files')).status, 404);
+    const nothere = await t.req('GET', `/api/database/drives/${encodeURIComponent(t.driveId)}/files?path=nothere`);
+    assert.equal(nothere.status, 404);
+    assert.deepEqual(nothere.data, { error: 'no such file on the drive: nothere', code: 'database.no_such_path', params: { path: 'nothere' } });
+    const nope = await t.req('GET', '/api/database/drives/9:NOPE/files');
+    assert.equal(nope.status, 404);
+    assert.deepEqual(nope.data, { error: 'no drive 9:NOPE', code: 'database.no_drive', params: { drive: '9:NOPE' } });
   } finally {
     await t.stop();
   }
@@ -212,8 +216,13 @@ test('replace from a drive keeps a backup; restore brings the old content back; 
     assert.ok(res[0].detail.includes(oldest));
 
     // Restore of an unknown or foreign backup.
-    assert.equal((await t.req('POST', '/api/database/files/parts.csv/restore', { json: { backup: 'parts.csv.nope' } })).status, 404);
-    assert.equal((await t.req('POST', '/api/database/files/parts.csv/restore', { json: { backup: 'fixtures.yaml.x' } })).status, 400);
+    const nope = await t.req('POST', '/api/database/files/parts.csv/restore', { json: { backup: 'parts.csv.nope' } });
+    assert.equal(nope.status, 404);
+    assert.deepEqual(nope.data, { error: 'no backup parts.csv.nope', code: 'database.no_backup', params: { backup: 'parts.csv.nope' } });
+    const foreign = await t.req('POST', '/api/database/files/parts.csv/restore', { json: { backup: 'fixtures.yaml.x' } });
+    assert.equal(foreign.status, 400);
+    assert.equal(foreign.data.code, 'database.invalid_backup');
+    assert.deepEqual(foreign.data.params, { file: 'parts.csv' });
     assert.equal((await t.req('POST', '/api/database/files/parts.csv/restore', { json: { backup: '../../users.json' } })).status, 400);
     assert.equal(entries(t.audit, 'database.restore').filter((e) => e.outcome === 'denied').length, 3);
   } finally {
@@ -263,9 +272,17 @@ test('path traversal is refused and nothing changes on disk', async () => {
     for (const [method, url, json, status] of cases) {
       const r = await t.req(method, url, { json });
       assert.equal(r.status, status, `${method} ${url} ${JSON.stringify(json)} -> ${r.status} ${r.text}`);
-      if (r.status !== 404 || r.data) assert.equal(typeof r.data?.error, 'string', `${url}: JSON error`);
+      if (r.status !== 404 || r.data) {
+        assert.equal(typeof r.data?.error, 'string', `${url}: JSON error`);
+        // Each refusal has a stable code for the app (database.invalid_path, database.outside_drive, ...).
+        assert.match(String(r.data.code), /^database\.[a-z_]+$/, `${url}: code`);
+      }
       assert.ok(!r.text.includes('root:'), 'no /etc/passwd content');
     }
+    const outside = await t.req('POST', '/api/database/files/parts.csv/from-drive', { json: { drive: t.driveId, path: 'passwd.csv' } });
+    assert.deepEqual(outside.data, { error: 'the path leads outside the drive', code: 'database.outside_drive' });
+    assert.equal((await t.req('GET', `/api/database/drives/${d}/files?path=..`)).data.code, 'database.invalid_path');
+    assert.equal((await t.req('GET', '/api/database/files/%2e%2e%2fusers.json/backups')).data.code, 'database.invalid_name');
     // Upload with a hostile client file name: only its extension counts; nothing is written outside.
     const up = await t.upload('parts.csv', '../../../../tmp/evil.csv', NEW_CSV);
     assert.equal(up.status, 200);
@@ -292,24 +309,46 @@ test('wrong extension (415), malformed content (422) and unlisted targets (404) 
     let r = await fromDrive('parts.csv', 'parts.txt');
     assert.equal(r.status, 415);
     assert.match(r.data.error, /\.csv/);
+    assert.equal(r.data.code, 'database.bad_extension');
+    assert.deepEqual(r.data.params, { file: 'parts.csv', expected: '.csv', got: '.txt' });
     assert.equal((await t.upload('parts.csv', 'parts.xlsx', NEW_CSV)).status, 415);
-    assert.equal((await t.upload('parts.csv', 'parts', NEW_CSV)).status, 415);
+    r = await t.upload('parts.csv', 'parts', NEW_CSV);
+    assert.equal(r.status, 415);
+    assert.deepEqual(r.data, { error: 'parts.csv needs a .csv file, not one without extension', code: 'database.bad_extension', params: { file: 'parts.csv', expected: '.csv', got: '' } });
     assert.equal((await fromDrive('fixtures.yaml', 'parts.csv')).status, 415);
 
     r = await fromDrive('parts.csv', 'bad.csv');
     assert.equal(r.status, 422);
     assert.match(r.data.error, /line 2 has 3 columns/);
-    assert.equal((await t.upload('parts.csv', 'p.csv', 'a,b\n"unclosed,1\n')).status, 422);
-    assert.equal((await t.upload('parts.csv', 'p.csv', '')).status, 422);
-    assert.equal((await t.upload('parts.csv', 'p.csv', Buffer.from('\xff\xfea\x00,\x00b\x00', 'latin1'))).status, 422, 'UTF-16');
+    assert.deepEqual(r.data, {
+      error: 'parts.csv not replaced: CSV line 2 has 3 columns, expected 2 (as in the first line)',
+      code: 'database.csv_columns', params: { file: 'parts.csv', line: 2, columns: 3, expected: 2 },
+    });
+    r = await t.upload('parts.csv', 'p.csv', 'a,b\n"unclosed,1\n');
+    assert.equal(r.status, 422);
+    assert.deepEqual([r.data.code, r.data.params], ['database.csv_unclosed_quote', { file: 'parts.csv', line: 2 }]);
+    r = await t.upload('parts.csv', 'p.csv', '');
+    assert.equal(r.status, 422);
+    assert.deepEqual(r.data, { error: 'parts.csv not replaced: the file is empty', code: 'database.empty_file', params: { file: 'parts.csv' } });
+    r = await t.upload('parts.csv', 'p.csv', Buffer.from('\xff\xfea\x00,\x00b\x00', 'latin1'));
+    assert.equal(r.status, 422, 'UTF-16');
+    assert.equal(r.data.code, 'database.nul_bytes');
     r = await t.upload('recipes.json', 'r.json', '{"a": 1,,}');
     assert.equal(r.status, 422);
     assert.match(r.data.error, /JSON/);
+    assert.equal(r.data.code, 'database.bad_json');
+    assert.equal(r.data.params.file, 'recipes.json');
+    assert.equal(r.data.error, `recipes.json not replaced: not valid JSON: ${r.data.params.detail}`);
     r = await fromDrive('fixtures.yaml', 'bad.yaml');
     assert.equal(r.status, 422);
     assert.match(r.data.error, /YAML/);
+    assert.equal(r.data.code, 'database.bad_yaml');
+    assert.equal(r.data.params.file, 'fixtures.yaml');
+    assert.equal(r.data.error, `fixtures.yaml not replaced: not valid YAML: ${r.data.params.detail} (line ${r.data.params.line})`);
 
-    assert.equal((await fromDrive('users.json', 'parts.csv')).status, 404);
+    r = await fromDrive('users.json', 'parts.csv');
+    assert.equal(r.status, 404);
+    assert.deepEqual(r.data, { error: 'users.json is not a database file of this cell', code: 'database.not_listed', params: { file: 'users.json' } });
     assert.equal((await t.upload('users.json', 'users.json', '{}')).status, 404);
     assert.equal((await t.upload('cell.yaml', 'cell.yaml', 'a: 1')).status, 404);
     assert.equal((await t.req('GET', '/api/database/files/users.json/backups')).status, 404);
@@ -333,11 +372,13 @@ test('too large: upload refused with 413 and its temp file removed; drive file t
     const r = await t.upload('parts.csv', 'parts.csv', big);
     assert.equal(r.status, 413);
     assert.match(r.data.error, /1000 bytes/);
+    assert.deepEqual(r.data, { error: 'the file is larger than the limit of 1000 bytes', code: 'database.too_large', params: { limit: 1000 } });
     assert.deepEqual(fs.readdirSync(path.join(t.dataDir, '.uploads')), [], 'spooled upload removed');
     assert.equal((await t.req('POST', '/api/database/files/parts.csv/from-drive', { json: { drive: t.driveId, path: 'big.csv' } })).status, 413);
     // Declared too large: refused before reading.
     const r3 = await t.req('POST', '/api/database/files/parts.csv/upload', { headers: { 'content-type': 'multipart/form-data; boundary=x' }, body: 'x'.repeat(70 * 1024) });
     assert.equal(r3.status, 413);
+    assert.equal(r3.data.code, 'database.too_large');
     // Exactly at the limit passes.
     const exact = 'a,b\n' + '1,2\n'.repeat(249);
     assert.equal(exact.length, 1000);
@@ -348,11 +389,14 @@ test('too large: upload refused with 413 and its temp file removed; drive file t
     assert.equal(entries(t.audit, 'database.replace').filter((e) => e.outcome === 'denied').length, 3);
 
     // Not multipart, no file field.
-    assert.equal((await t.req('POST', '/api/database/files/parts.csv/upload', { json: { a: 1 } })).status, 415);
+    const notMultipart = await t.req('POST', '/api/database/files/parts.csv/upload', { json: { a: 1 } });
+    assert.equal(notMultipart.status, 415);
+    assert.equal(notMultipart.data.code, 'database.not_multipart');
     const fd = new FormData();
     fd.append('other', new Blob(['x']), 'parts.csv');
     const res = await fetch(`http://127.0.0.1:${t.port}/api/database/files/parts.csv/upload`, { method: 'POST', body: fd, headers: { 'x-test-user': 'ada' } });
     assert.equal(res.status, 400);
+    assert.deepEqual(await res.json(), { error: 'unexpected file field ("other"); send one file, in the field "file"', code: 'database.one_file' });
   } finally {
     await t.stop();
   }
@@ -365,6 +409,7 @@ test('a failed write leaves the old file intact, removes the temp file and is au
     const r = await t.req('POST', '/api/database/files/parts.csv/from-drive', { json: { drive: t.driveId, path: 'parts.csv' } });
     assert.equal(r.status, 500);
     assert.match(r.data.error, /EIO/);
+    assert.equal(r.data.code, undefined, 'a server failure has no client code');
     assert.equal(fs.readFileSync(path.join(t.db, 'parts.csv'), 'utf8'), OLD_CSV);
     assert.deepEqual(fs.readdirSync(t.db).filter((n) => n.endsWith('.tmp')), [], 'temp file removed');
     assert.deepEqual(fs.existsSync(path.join(t.db, '.backups')) ? fs.readdirSync(path.join(t.db, '.backups')) : [], [], 'no stray backup');
@@ -407,7 +452,9 @@ test('session and the database page are required', async () => {
     assert.equal((await t.upload('parts.csv', 'parts.csv', NEW_CSV, 'olga')).status, 403);
     assert.equal(fs.readFileSync(path.join(t.db, 'parts.csv'), 'utf8'), OLD_CSV);
     // Bad JSON bodies.
-    assert.equal((await t.req('POST', '/api/database/files/parts.csv/from-drive', { json: { drive: t.driveId } })).status, 400);
+    const noPath = await t.req('POST', '/api/database/files/parts.csv/from-drive', { json: { drive: t.driveId } });
+    assert.equal(noPath.status, 400);
+    assert.deepEqual(noPath.data, { error: '"path" must be a non-empty string', code: 'request.invalid', params: { detail: '"path" must be a non-empty string' } });
     assert.equal((await t.req('POST', '/api/database/files/parts.csv/restore', { json: [] })).status, 400);
   } finally {
     await t.stop();

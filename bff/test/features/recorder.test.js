@@ -107,11 +107,15 @@ test('one recording: its topics and timeline, only the lanes and changes that ma
     assert.equal(r.data.start_ms, SIDECAR.start_ms);
     assert.deepEqual(r.data.topics, SIDECAR.topics);
     assert.deepEqual(r.data.timeline.lanes.map((l) => [l.id, l.changes.length]), [['alarms', 1], ['process', 1]]);
-    assert.equal((await s.req('GET', '/api/recorder/recordings/nope.mcap')).status, 404);
+    const nope = await s.req('GET', '/api/recorder/recordings/nope.mcap');
+    assert.equal(nope.status, 404);
+    assert.deepEqual(nope.data, { error: 'no recording nope.mcap', code: 'recorder.not_found', params: { name: 'nope.mcap' } });
     for (const bad of ['..%2Fsecret.mcap', '.tmp-abc.mcap', 'notes.txt', '%2Fetc%2Fpasswd']) {
       const b = await s.req('GET', `/api/recorder/recordings/${bad}`);
       assert.equal(b.status, 400, bad);
       assert.match(b.data.error, /not a recording's name/);
+      assert.equal(b.data.code, 'recorder.invalid_name', bad);
+      assert.equal(b.data.params.name, decodeURIComponent(bad), bad);
     }
   } finally {
     await s.stop();
@@ -126,7 +130,9 @@ test('a download is the file itself, as an attachment, and is audited', async ()
     assert.ok(r.body.equals(MCAP));
     assert.equal(r.headers['content-disposition'], `attachment; filename="${NAME}"`);
     assert.equal((await s.req('GET', '/api/recorder/recordings/..%2Fsecret.mcap/file')).status, 400);
-    assert.equal((await s.req('GET', '/api/recorder/recordings/gone.mcap/file')).status, 404);
+    const gone = await s.req('GET', '/api/recorder/recordings/gone.mcap/file');
+    assert.equal(gone.status, 404);
+    assert.deepEqual([gone.data.code, gone.data.params], ['recorder.not_found', { name: 'gone.mcap' }]);
     const entries = s.audit.query({ op: 'recorder.download' }).entries;
     assert.deepEqual(entries.map((e) => [e.user, e.target, e.outcome]).sort(), [
       ['ada', '../secret.mcap', 'denied'], ['ada', 'gone.mcap', 'denied'], ['olga', NAME, 'ok'],
@@ -141,6 +147,7 @@ test('only the roles the cell file names delete, the description goes with the f
   try {
     const refused = await s.req('DELETE', `/api/recorder/recordings/${NAME}`, 'olga');
     assert.equal(refused.status, 403);
+    assert.deepEqual(refused.data, { error: 'role operator may not delete recordings', code: 'recorder.delete_denied', params: { role: 'operator' } });
     assert.ok(fs.existsSync(path.join(s.dir, NAME)));
     const ok = await s.req('DELETE', `/api/recorder/recordings/${NAME}`, 'ada');
     assert.deepEqual([ok.status, ok.data], [200, { deleted: NAME }]);

@@ -344,8 +344,13 @@ test('the mesh route serves the files the URDF references: relative to the URDF 
     '/api/scene/arms/arm/meshes/-1/link_1.stl', '/api/scene/arms/arm/meshes/00/link_1.stl', '/api/scene/arms/arm/meshes/0/..%2Ftwo_link.urdf']) {
     const r = await get(p);
     assert.equal(r.status, 404, p);
-    assert.match((await r.json()).error, /has no mesh/, p);
+    const body = await r.json();
+    assert.match(body.error, /has no mesh/, p);
+    assert.equal(body.code, 'scene.no_mesh', p);
   }
+  assert.deepEqual(await (await get('/api/scene/arms/arm/meshes/1/link_1.stl')).json(), {
+    error: 'the URDF of the arm "arm" has no mesh 1 named link_1.stl', code: 'scene.no_mesh', params: { arm: 'arm', index: '1', name: 'link_1.stl' },
+  });
 });
 
 test('file:// and absolute mesh paths are served; a missing file, an http:// mesh are a 404 naming the file, not its path', async () => {
@@ -365,12 +370,17 @@ test('file:// and absolute mesh paths are served; a missing file, an http:// mes
   assert.equal(missing.status, 404);
   assert.match(missing.headers.get('content-type'), /^application\/json/);
   assert.equal(missing.headers.get('cache-control'), 'no-store');
-  const error = (await missing.json()).error;
+  const body = await missing.json();
+  const error = body.error;
   assert.match(error, /^the mesh missing\.stl cannot be read/);
-  assert.ok(!error.includes(dir), error);
+  assert.ok(!JSON.stringify(body).includes(dir), error);
+  assert.equal(body.code, 'scene.mesh_unreadable');
+  assert.equal(body.params.name, 'missing.stl');
   const remote = await get('/api/scene/arms/fileuri/meshes/3/remote.dae');
   assert.equal(remote.status, 404);
-  assert.equal((await remote.json()).error, 'the mesh remote.dae cannot be read: http:// URIs are not served');
+  assert.deepEqual(await remote.json(), {
+    error: 'the mesh remote.dae cannot be read: http:// URIs are not served', code: 'scene.mesh_scheme', params: { name: 'remote.dae', scheme: 'http' },
+  });
 });
 
 test('package:// meshes are found through ROS_PACKAGE_PATH (a package.xml deep under an entry, or <entry>/<pkg>/)', async () => {
@@ -384,11 +394,14 @@ test('package:// meshes are found through ROS_PACKAGE_PATH (a package.xml deep u
   assert.match(await dae.text(), /<COLLADA/);
   const none = await get('/api/scene/arms/pkg/meshes/1/x.stl');
   assert.equal(none.status, 404);
-  assert.equal((await none.json()).error, 'the mesh x.stl cannot be read: the package "no_such_package" is not on ROS_PACKAGE_PATH');
+  assert.deepEqual(await none.json(), {
+    error: 'the mesh x.stl cannot be read: the package "no_such_package" is not on ROS_PACKAGE_PATH',
+    code: 'scene.mesh_no_package', params: { name: 'x.stl', package: 'no_such_package' },
+  });
   // A file of another kind is not served, even when the URDF names it (any node may set the parameter).
   const ply = await get('/api/scene/arms/pkg/meshes/2/part.ply');
   assert.equal(ply.status, 404);
-  assert.equal((await ply.json()).error, 'the mesh part.ply is not served: only .stl, .dae and .obj meshes are');
+  assert.deepEqual(await ply.json(), { error: 'the mesh part.ply is not served: only .stl, .dae and .obj meshes are', code: 'scene.mesh_format', params: { name: 'part.ply' } });
 });
 
 test('the URDF from a ROS parameter through the master\'s getParam; a ros_control group\'s own parameter', async () => {
@@ -438,26 +451,34 @@ test('a mesh asked before its URDF reads the URDF first; the mapping follows the
 
 test('parameter errors: not set 404, not a string or not a <robot> document 422, a master that fails 409', async () => {
   const cases = [
-    ['unset', 404, 'no URDF on the parameter /not_set (is the arm\'s driver up?)'],
-    ['number', 422, 'the parameter /a_number does not hold a URDF: it holds a number, not a string'],
-    ['ns', 422, 'the parameter /ns does not hold a URDF: it holds a namespace (a dictionary of parameters), not a string'],
-    ['notrobot', 422, 'the parameter /not_robot does not hold a URDF: its root element is <html>, not <robot>'],
-    ['http', 409, `the ROS master at ${master.uri} does not answer with XML-RPC (HTTP 500): the URDF parameter cannot be read`],
+    ['unset', 404, 'no URDF on the parameter /not_set (is the arm\'s driver up?)', 'scene.param_unset', { param: '/not_set' }],
+    ['number', 422, 'the parameter /a_number does not hold a URDF: it holds a number, not a string', 'scene.param_not_string', { param: '/a_number' }],
+    ['ns', 422, 'the parameter /ns does not hold a URDF: it holds a namespace (a dictionary of parameters), not a string', 'scene.param_not_string', { param: '/ns' }],
+    ['notrobot', 422, 'the parameter /not_robot does not hold a URDF: its root element is <html>, not <robot>', 'scene.param_root_not_robot', { param: '/not_robot', root: 'html' }],
+    ['http', 409, `the ROS master at ${master.uri} does not answer with XML-RPC (HTTP 500): the URDF parameter cannot be read`, 'scene.master_not_xmlrpc', { master: master.uri, detail: 'HTTP 500' }],
   ];
-  for (const [group, status, error] of cases) {
+  for (const [group, status, error, code, params] of cases) {
     const res = await get(`/api/scene/arms/${group}/urdf`);
     assert.equal(res.status, status, group);
-    assert.deepEqual(await res.json(), { error }, group);
+    assert.deepEqual(await res.json(), { error, code, params }, group);
     // The mesh route reads the URDF when it has no mapping: the same answer.
     const mesh = await get(`/api/scene/arms/${group}/meshes/0/x.stl`);
     assert.equal(mesh.status, status, `${group} mesh`);
   }
   const garbage = await get('/api/scene/arms/garbage/urdf');
   assert.equal(garbage.status, 422);
-  assert.match((await garbage.json()).error, /^the parameter \/garbage does not hold a URDF: /);
+  const notUrdf = await garbage.json();
+  assert.match(notUrdf.error, /^the parameter \/garbage does not hold a URDF: /);
+  assert.equal(notUrdf.code, 'scene.param_not_urdf');
+  assert.equal(notUrdf.error, `the parameter /garbage does not hold a URDF: ${notUrdf.params.detail}`);
+  assert.equal(notUrdf.params.param, '/garbage');
   const unknown = await get('/api/scene/arms/gantry/urdf');
   assert.equal(unknown.status, 404);
-  assert.match((await unknown.json()).error, /^no arm "gantry" in this cell's scene \(arms: arm, fileuri, pkg, param, iiwa,/);
+  const noArm = await unknown.json();
+  assert.match(noArm.error, /^no arm "gantry" in this cell's scene \(arms: arm, fileuri, pkg, param, iiwa,/);
+  assert.equal(noArm.code, 'scene.no_arm');
+  assert.equal(noArm.params.arm, 'gantry');
+  assert.match(noArm.params.arms, /^arm, fileuri, pkg, param, iiwa,/);
   assert.equal((await get('/api/scene/arms/gantry/meshes/0/x.stl')).status, 404);
 });
 
@@ -467,11 +488,16 @@ test('a URDF file that is no URDF any more is a 422, one that is gone a 404: the
   fs.writeFileSync(file, '<html/>');
   const bad = await get('/api/scene/arms/gone/urdf');
   assert.equal(bad.status, 422);
-  assert.deepEqual(await bad.json(), { error: 'the URDF file gone.urdf does not hold a URDF: its root element is <html>, not <robot>' });
+  assert.deepEqual(await bad.json(), {
+    error: 'the URDF file gone.urdf does not hold a URDF: its root element is <html>, not <robot>', code: 'scene.file_root_not_robot', params: { file: 'gone.urdf', root: 'html' },
+  });
   fs.rmSync(file);
   const gone = await get('/api/scene/arms/gone/urdf');
   assert.equal(gone.status, 404);
-  assert.deepEqual(await gone.json(), { error: 'the URDF file gone.urdf (scene.arms[12].urdf) cannot be read (ENOENT)' });
+  assert.deepEqual(await gone.json(), {
+    error: 'the URDF file gone.urdf (scene.arms[12].urdf) cannot be read (ENOENT)',
+    code: 'scene.file_unreadable', params: { file: 'gone.urdf', field: 'scene.arms[12].urdf', reason: 'ENOENT' },
+  });
   fs.writeFileSync(file, urdfWith([])); // back, for the BFFs the next tests start from this cell file
 });
 
@@ -482,7 +508,9 @@ test('a ROS master that does not answer: 409 with what cannot be done, and the B
     const cookie = (await login(t2.base, 'admin', t2.passwords.admin)).cookie;
     const res = await fetch(`${t2.base}/api/scene/arms/param/urdf`, { headers: { cookie } });
     assert.equal(res.status, 409);
-    assert.deepEqual(await res.json(), { error: 'the ROS master at http://127.0.0.1:1 does not answer: the URDF parameter cannot be read' });
+    assert.deepEqual(await res.json(), {
+      error: 'the ROS master at http://127.0.0.1:1 does not answer: the URDF parameter cannot be read', code: 'scene.master_down', params: { master: 'http://127.0.0.1:1' },
+    });
     assert.equal((await fetch(`${t2.base}/api/scene/arms/param/meshes/0/link_1.stl`, { headers: { cookie } })).status, 409);
     // A file URDF needs no master.
     assert.equal((await fetch(`${t2.base}/api/scene/arms/arm/urdf`, { headers: { cookie } })).status, 200);
@@ -505,10 +533,12 @@ test('getParam: a master that accepts but never answers, or answers with a fault
     const uri = (s) => `http://127.0.0.1:${s.address().port}`;
     const started = Date.now();
     await assert.rejects(getParam(uri(hang), '/robot_description', { timeoutMs: 200 }),
-      (e) => e instanceof SceneError && e.status === 409 && e.message === `the ROS master at ${uri(hang)} does not answer: the URDF parameter cannot be read`);
+      (e) => e instanceof SceneError && e.status === 409 && e.message === `the ROS master at ${uri(hang)} does not answer: the URDF parameter cannot be read`
+        && e.code === 'scene.master_down');
     assert.ok(Date.now() - started < 2000);
     await assert.rejects(getParam(uri(fault), '/robot_description'),
-      (e) => e instanceof SceneError && e.status === 409 && e.message === `the ROS master at ${uri(fault)} refused getParam /robot_description: bad caller`);
+      (e) => e instanceof SceneError && e.status === 409 && e.message === `the ROS master at ${uri(fault)} refused getParam /robot_description: bad caller`
+        && e.code === 'scene.master_refused' && JSON.stringify(e.params) === JSON.stringify({ master: uri(fault), param: '/robot_description', detail: 'bad caller' }));
   } finally {
     for (const s of [hang, fault]) { s.closeAllConnections(); s.close(); }
   }
@@ -526,11 +556,11 @@ test('a URDF naming one of the BFF\'s own files as a mesh does not get it', asyn
   for (const [i, name] of [[0, 'users.json'], [1, 'audit.log']]) {
     const res = await get(`/api/scene/arms/secret/meshes/${i}/${name}`);
     assert.equal(res.status, 404, name);
-    assert.deepEqual(await res.json(), { error: `the mesh ${name} is not served: only .stl, .dae and .obj meshes are` });
+    assert.deepEqual(await res.json(), { error: `the mesh ${name} is not served: only .stl, .dae and .obj meshes are`, code: 'scene.mesh_format', params: { name } });
   }
   const res = await get('/api/scene/arms/secret/meshes/3/users.stl');
   assert.equal(res.status, 404);
-  assert.deepEqual(await res.json(), { error: 'the mesh users.stl cannot be read: it lies among the BFF\'s own files' });
+  assert.deepEqual(await res.json(), { error: 'the mesh users.stl cannot be read: it lies among the BFF\'s own files', code: 'scene.mesh_private', params: { name: 'users.stl' } });
   assert.equal((await get('/api/scene/arms/secret/meshes/2/link_1.stl')).status, 200);
 });
 

@@ -1,8 +1,18 @@
 // Content sanity checks by file type, before a database file is replaced. Pure functions of the bytes.
 import yaml from 'js-yaml';
 
-/** Thrown when the content does not parse; `message` is shown to the user. */
-export class ContentError extends Error {}
+/**
+ * Thrown when the content does not parse; `message` is shown to the user. `code` and `params`: the same for the app
+ * to say in the user's language (`database.csv_columns` {line, columns, expected}); the file's name is added by the caller.
+ */
+export class ContentError extends Error {
+  /** @param {string} message @param {string} [code] @param {Record<string, string | number>} [params] */
+  constructor(message, code = undefined, params = undefined) {
+    super(message);
+    this.code = code;
+    this.params = params;
+  }
+}
 
 /**
  * Checks .csv, .json, .yaml/.yml content; other extensions are not checked.
@@ -12,8 +22,8 @@ export class ContentError extends Error {}
  */
 export function checkContent(ext, buf) {
   if (!['.csv', '.json', '.yaml', '.yml'].includes(ext)) return;
-  if (buf.length === 0) throw new ContentError('the file is empty');
-  if (buf.includes(0)) throw new ContentError('the file contains NUL bytes (binary, or UTF-16 text; save it as UTF-8)');
+  if (buf.length === 0) throw new ContentError('the file is empty', 'database.empty_file');
+  if (buf.includes(0)) throw new ContentError('the file contains NUL bytes (binary, or UTF-16 text; save it as UTF-8)', 'database.nul_bytes');
   if (ext === '.csv') {
     // Delimiters and quotes are ASCII, so the byte structure is the same in UTF-8 and in 8-bit code pages.
     checkCsv(buf.toString('latin1').replace(/^\xEF\xBB\xBF/, ''));
@@ -23,19 +33,21 @@ export function checkContent(ext, buf) {
   try {
     text = new TextDecoder('utf-8', { fatal: true }).decode(buf).replace(/^\uFEFF/, '');
   } catch {
-    throw new ContentError('the file is not UTF-8 text');
+    throw new ContentError('the file is not UTF-8 text', 'database.not_utf8');
   }
   if (ext === '.json') {
     try {
       JSON.parse(text);
     } catch (e) {
-      throw new ContentError(`not valid JSON: ${e.message}`);
+      throw new ContentError(`not valid JSON: ${e.message}`, 'database.bad_json', { detail: String(e.message) });
     }
   } else {
     try {
       yaml.load(text);
     } catch (e) {
-      throw new ContentError(`not valid YAML: ${e.reason || e.message}${e.mark ? ` (line ${e.mark.line + 1})` : ''}`);
+      const detail = String(e.reason || e.message);
+      throw new ContentError(`not valid YAML: ${detail}${e.mark ? ` (line ${e.mark.line + 1})` : ''}`, 'database.bad_yaml',
+        e.mark ? { detail, line: e.mark.line + 1 } : { detail });
     }
   }
 }
@@ -61,7 +73,7 @@ export function checkCsv(text) {
   const endRecord = () => {
     if (!blank) {
       if (columns === -1) columns = fields;
-      else if (fields !== columns) throw new ContentError(`CSV line ${recordLine} has ${fields} columns, expected ${columns} (as in the first line)`);
+      else if (fields !== columns) throw new ContentError(`CSV line ${recordLine} has ${fields} columns, expected ${columns} (as in the first line)`, 'database.csv_columns', { line: recordLine, columns: fields, expected: columns });
       rows++;
     }
     fields = 1;
@@ -70,12 +82,12 @@ export function checkCsv(text) {
   while (i < n) {
     const c = text[i];
     if (c === '"') {
-      if (!atFieldStart(text, i, delimiter)) throw new ContentError(`CSV line ${line}: quote inside an unquoted field`);
+      if (!atFieldStart(text, i, delimiter)) throw new ContentError(`CSV line ${line}: quote inside an unquoted field`, 'database.csv_stray_quote', { line });
       blank = false;
       const startLine = line;
       i++;
       for (;;) {
-        if (i >= n) throw new ContentError(`CSV line ${startLine}: quoted field is not closed`);
+        if (i >= n) throw new ContentError(`CSV line ${startLine}: quoted field is not closed`, 'database.csv_unclosed_quote', { line: startLine });
         if (text[i] === '"') {
           if (text[i + 1] === '"') { i += 2; continue; }
           i++;
@@ -84,7 +96,7 @@ export function checkCsv(text) {
         if (text[i] === '\n') line++;
         i++;
       }
-      if (i < n && text[i] !== delimiter && text[i] !== '\n' && text[i] !== '\r') throw new ContentError(`CSV line ${line}: text after a closing quote`);
+      if (i < n && text[i] !== delimiter && text[i] !== '\n' && text[i] !== '\r') throw new ContentError(`CSV line ${line}: text after a closing quote`, 'database.csv_text_after_quote', { line });
       continue;
     }
     if (c === delimiter) { fields++; blank = false; i++; continue; }
@@ -104,7 +116,7 @@ export function checkCsv(text) {
     i++;
   }
   endRecord();
-  if (rows === 0) throw new ContentError('the CSV file has no rows');
+  if (rows === 0) throw new ContentError('the CSV file has no rows', 'database.csv_no_rows');
   return { delimiter, columns, rows };
 }
 

@@ -23,12 +23,17 @@ import { checkContent, ContentError } from './content-check.js';
 export const DEFAULT_USB_ROOTS = ['/media', '/run/media'];
 export const DEFAULT_MAX_UPLOAD_BYTES = 10 * 1024 * 1024;
 
-/** An error with an HTTP status and a message meant for the user. */
+/**
+ * An error with an HTTP status and a message meant for the user; a client error's `code` and `params` are the same
+ * for the app to say in the user's language (`database.not_listed` {file}: app/messages/errors).
+ */
 export class DatabaseError extends Error {
-  /** @param {number} status @param {string} message */
-  constructor(status, message) {
+  /** @param {number} status @param {string} message @param {string} [code] @param {Record<string, string | number>} [params] */
+  constructor(status, message, code = undefined, params = undefined) {
     super(message);
     this.status = status;
+    this.code = code;
+    this.params = params;
   }
 }
 
@@ -172,10 +177,10 @@ export class DatabaseFiles {
    */
   async listDriveFiles(driveId, subpath = '') {
     const drive = await this.#drive(driveId);
-    if (!isSafeRelPath(subpath, true)) throw new DatabaseError(400, 'invalid path');
+    if (!isSafeRelPath(subpath, true)) throw new DatabaseError(400, 'invalid path', 'database.invalid_path');
     const dir = await this.#realInside(drive.real, subpath);
     const st = await fsp.stat(dir);
-    if (!st.isDirectory()) throw new DatabaseError(400, 'not a directory');
+    if (!st.isDirectory()) throw new DatabaseError(400, 'not a directory', 'database.not_a_directory');
     /** @type {{name: string, type: 'file'|'dir', size?: number, mtime?: string, targets?: string[]}[]} */
     const entries = [];
     for (const e of await readdirOrEmpty(dir)) {
@@ -203,10 +208,10 @@ export class DatabaseFiles {
     return this.#audited('database.replace', target, user, `from drive ${driveId}: ${relPath}`, async () => {
       this.#target(target);
       const drive = await this.#drive(driveId);
-      if (!isSafeRelPath(relPath)) throw new DatabaseError(400, 'invalid path');
+      if (!isSafeRelPath(relPath)) throw new DatabaseError(400, 'invalid path', 'database.invalid_path');
       const src = await this.#realInside(drive.real, relPath);
       const st = await fsp.stat(src);
-      if (!st.isFile()) throw new DatabaseError(400, 'not a file');
+      if (!st.isFile()) throw new DatabaseError(400, 'not a file', 'database.not_a_file');
       this.#sameExtension(target, relPath);
       if (st.size > this.maxBytes) throw tooLarge(this.maxBytes);
       return this.#install(target, () => fs.createReadStream(src), { check: true });
@@ -243,11 +248,11 @@ export class DatabaseFiles {
     return this.#audited('database.restore', target, user, `backup ${backupName}`, async () => {
       this.#target(target);
       if (!isBackupOf(target, backupName)) {
-        throw new DatabaseError(400, `invalid backup name: expected ${target}.<time> as listed by GET .../backups`);
+        throw new DatabaseError(400, `invalid backup name: expected ${target}.<time> as listed by GET .../backups`, 'database.invalid_backup', { file: target });
       }
       const src = path.join(this.backupDir, backupName);
       const st = await fsp.lstat(src).catch(() => null);
-      if (!st?.isFile()) throw new DatabaseError(404, `no backup ${backupName}`);
+      if (!st?.isFile()) throw new DatabaseError(404, `no backup ${backupName}`, 'database.no_backup', { backup: backupName });
       // No content check: a backup was the live file once, and restoring must work even if checks got stricter.
       return this.#install(target, () => fs.createReadStream(src), { check: false });
     });
@@ -257,25 +262,28 @@ export class DatabaseFiles {
 
   #target(name) {
     if (this.targets.includes(name)) return; // the cell file's names are checked by its schema
-    if (!satisfies(FILE_NAME, name) || !isSafeName(name)) throw new DatabaseError(400, 'invalid file name');
-    throw new DatabaseError(404, `${name} is not a database file of this cell`);
+    if (!satisfies(FILE_NAME, name) || !isSafeName(name)) throw new DatabaseError(400, 'invalid file name', 'database.invalid_name');
+    throw new DatabaseError(404, `${name} is not a database file of this cell`, 'database.not_listed', { file: name });
   }
 
   #sameExtension(target, sourceName) {
     if (ext(sourceName) !== ext(target)) {
-      throw new DatabaseError(415, `${target} needs a ${ext(target) || 'extension-less'} file, not ${ext(sourceName) || 'one without extension'}`);
+      // expected, got: '' for no extension.
+      throw new DatabaseError(415, `${target} needs a ${ext(target) || 'extension-less'} file, not ${ext(sourceName) || 'one without extension'}`,
+        'database.bad_extension', { file: target, expected: ext(target), got: ext(sourceName) });
     }
   }
 
   /** @returns {Promise<Drive & {real: string}>} */
   async #drive(id) {
-    if (!satisfies(DRIVE_ID, id) || !isSafeName(id)) throw new DatabaseError(400, 'invalid drive id');
+    if (!satisfies(DRIVE_ID, id) || !isSafeName(id)) throw new DatabaseError(400, 'invalid drive id', 'database.invalid_drive');
+    const noDrive = () => new DatabaseError(404, `no drive ${id}`, 'database.no_drive', { drive: id });
     const d = (await this.listDrives()).find((x) => x.id === id);
-    if (!d) throw new DatabaseError(404, `no drive ${id}`);
+    if (!d) throw noDrive();
     try {
       return { ...d, real: await fsp.realpath(d.path) };
     } catch {
-      throw new DatabaseError(404, `no drive ${id}`);
+      throw noDrive();
     }
   }
 
@@ -286,11 +294,12 @@ export class DatabaseFiles {
       real = await fsp.realpath(path.join(root, rel));
     } catch (e) {
       // Names too long for the file system and symbolic-link loops cannot name a file there either.
-      if (['ENOENT', 'ENOTDIR', 'ENAMETOOLONG', 'ELOOP'].includes(e.code)) throw new DatabaseError(404, `no such file on the drive: ${rel.slice(0, 300)}`);
-      if (e.code === 'EACCES' || e.code === 'EPERM') throw new DatabaseError(403, `not readable on the drive: ${rel.slice(0, 300)}`);
+      const shown = rel.slice(0, 300);
+      if (['ENOENT', 'ENOTDIR', 'ENAMETOOLONG', 'ELOOP'].includes(e.code)) throw new DatabaseError(404, `no such file on the drive: ${shown}`, 'database.no_such_path', { path: shown });
+      if (e.code === 'EACCES' || e.code === 'EPERM') throw new DatabaseError(403, `not readable on the drive: ${shown}`, 'database.not_readable', { path: shown });
       throw e;
     }
-    if (!inside(root, real)) throw new DatabaseError(403, 'the path leads outside the drive');
+    if (!inside(root, real)) throw new DatabaseError(403, 'the path leads outside the drive', 'database.outside_drive');
     return real;
   }
 
@@ -349,7 +358,7 @@ export class DatabaseFiles {
         try {
           checkContent(ext(target), await f.readFile(tmp));
         } catch (e) {
-          if (e instanceof ContentError) throw new DatabaseError(422, `${target} not replaced: ${e.message}`);
+          if (e instanceof ContentError) throw new DatabaseError(422, `${target} not replaced: ${e.message}`, e.code, { file: target, ...e.params });
           throw e;
         }
       }
@@ -408,7 +417,8 @@ export class DatabaseFiles {
 /** A backup name of that target: "<target>.<suffix>" (BACKUP_NAME), the suffix a single safe name. */
 const isBackupOf = (target, name) => satisfies(BACKUP_NAME, name) && name.startsWith(`${target}.`) && isSafeName(name.slice(target.length + 1));
 
-const tooLarge = (max) => new DatabaseError(413, `the file is larger than the limit of ${max} bytes`);
+/** @param {number} max */
+export const tooLarge = (max) => new DatabaseError(413, `the file is larger than the limit of ${max} bytes`, 'database.too_large', { limit: max });
 
 async function statOrNull(p) {
   try { return await fsp.stat(p); } catch { return null; }

@@ -3,8 +3,8 @@ import fsp from 'node:fs/promises';
 import path from 'node:path';
 import express, { Router } from 'express';
 import multer from 'multer';
-import { DatabaseError, FILE_NAME, DRIVE_ID, BACKUP_NAME, REL_PATH, REL_PATH_OR_ROOT } from './database-files.js';
-import { httpError, multipartError } from '../../core/http/errors.js';
+import { DatabaseError, FILE_NAME, DRIVE_ID, BACKUP_NAME, REL_PATH, REL_PATH_OR_ROOT, tooLarge } from './database-files.js';
+import { errorBody, httpError, multipartError } from '../../core/http/errors.js';
 
 /**
  * @param {{service: import('./database-files.js').DatabaseFiles, guard: import('express').RequestHandler[],
@@ -27,10 +27,10 @@ export function databaseRoutes({ service, guard, uploadDir, log = (m) => console
     }
   };
   const body = (req, ...keys) => {
-    if (!req.is('application/json')) throw new DatabaseError(415, 'expected application/json');
+    if (!req.is('application/json')) throw new DatabaseError(415, 'expected application/json', 'request.not_json');
     const b = req.body;
-    if (!b || typeof b !== 'object' || Array.isArray(b)) throw new DatabaseError(400, 'expected a JSON object');
-    for (const k of keys) if (typeof b[k] !== 'string' || b[k] === '') throw new DatabaseError(400, `"${k}" must be a non-empty string`);
+    if (!b || typeof b !== 'object' || Array.isArray(b)) throw invalidRequest(400, 'expected a JSON object');
+    for (const k of keys) if (typeof b[k] !== 'string' || b[k] === '') throw invalidRequest(400, `"${k}" must be a non-empty string`);
     return b;
   };
 
@@ -38,7 +38,7 @@ export function databaseRoutes({ service, guard, uploadDir, log = (m) => console
   r.get('/api/database/drives', ...guard, handle(async () => ({ drives: await service.listDrives() })));
   r.get('/api/database/drives/:drive/files', ...guard, handle(async (req) => {
     const p = req.query.path ?? '';
-    if (typeof p !== 'string') throw new DatabaseError(400, 'invalid path');
+    if (typeof p !== 'string') throw new DatabaseError(400, 'invalid path', 'database.invalid_path');
     return service.listDriveFiles(param(req, 'drive'), p);
   }));
   r.post('/api/database/files/:name/from-drive', ...guard, json, handle(async (req) => {
@@ -67,14 +67,14 @@ export function databaseRoutes({ service, guard, uploadDir, log = (m) => console
     try {
       // Unknown targets and names are refused before anything is received.
       await service.listBackups(param(req, 'name'));
-      if (!req.is('multipart/form-data')) throw new DatabaseError(415, 'expected multipart/form-data with a field "file"');
+      if (!req.is('multipart/form-data')) throw new DatabaseError(415, 'expected multipart/form-data with a field "file"', 'database.not_multipart');
       const declared = Number(req.headers['content-length']);
       if (Number.isFinite(declared) && declared > service.maxBytes + 64 * 1024) throw tooLarge(service.maxBytes);
       await fsp.mkdir(spool, { recursive: true, mode: 0o700 });
       dir = await fsp.mkdtemp(path.join(spool, 'up-'));
       req.uploadDir = dir;
       await new Promise((resolve, reject) => upload(req, res, (err) => (err ? reject(err) : resolve())));
-      if (!req.file) throw new DatabaseError(400, 'no file in field "file"');
+      if (!req.file) throw new DatabaseError(400, 'no file in field "file"', 'database.no_file');
       received = true;
       result = await service.replaceFromUpload(param(req, 'name'), req.file.path, req.file.originalname, actor(req));
     } catch (e) {
@@ -97,7 +97,8 @@ export function databaseRoutes({ service, guard, uploadDir, log = (m) => console
 /** Express 5 types a path parameter as string | string[]; ours are single segments. @param {import('express').Request} req @param {string} k */
 const param = (req, k) => String(req.params[k]);
 
-const tooLarge = (max) => new DatabaseError(413, `the file is larger than the limit of ${max} bytes`);
+/** A request the core's OpenAPI check would refuse too: the same code (request.invalid {detail}). @param {number} status @param {string} message */
+const invalidRequest = (status, message) => new DatabaseError(status, message, 'request.invalid', { detail: message });
 
 /**
  * What went wrong while receiving a multipart body: multer's limits and busboy's parse errors are the client's
@@ -107,15 +108,17 @@ function uploadError(e, max) {
   if (e?.code === 'LIMIT_FILE_SIZE') return tooLarge(max);
   const m = multipartError(e);
   if (!m.clientError) return e;
-  const hint = ['LIMIT_UNEXPECTED_FILE', 'LIMIT_FILE_COUNT'].includes(e?.code) ? '; send one file, in the field "file"' : '';
-  return new DatabaseError(m.status, `${m.message}${hint}`);
+  if (['LIMIT_UNEXPECTED_FILE', 'LIMIT_FILE_COUNT'].includes(e?.code)) {
+    return new DatabaseError(m.status, `${m.message}; send one file, in the field "file"`, 'database.one_file');
+  }
+  return m.code ? new DatabaseError(m.status, m.message, m.code, m.params) : invalidRequest(m.status, m.message);
 }
 
 function sendError(res, e, log) {
   if (res.headersSent) return;
-  if (e instanceof DatabaseError && e.status < 500) return res.status(e.status).json({ error: e.message });
+  if (e instanceof DatabaseError && e.status < 500) return res.status(e.status).json(e.code ? errorBody(e.message, e.code, e.params) : { error: e.message });
   const h = httpError(e);
-  if (h.clientError) return res.status(h.status).json({ error: h.message });
+  if (h.clientError) return res.status(h.status).json(h.code ? errorBody(h.message, h.code, h.params) : { error: h.message });
   log(`database: ${e?.stack || e}`);
   // A failed write says what failed (the old file is unchanged); other failures stay 'internal error'.
   res.status(500).json({ error: e instanceof DatabaseError ? e.message : 'internal error' });
@@ -128,7 +131,8 @@ function sendError(res, e, log) {
  */
 export const databaseOpenApiPaths = (() => {
   const json = (schema) => ({ content: { 'application/json': { schema } } });
-  const error = { type: 'object', required: ['error'], properties: { error: { type: 'string' } } };
+  // code and params: a stable code ("database.not_listed") and the values in the message, for the app to say in the user's language.
+  const error = { type: 'object', required: ['error'], properties: { error: { type: 'string' }, code: { type: 'string' }, params: { type: 'object' } } };
   const err = (description) => ({ description, ...json(error) });
   const name = { name: 'name', in: 'path', required: true, description: 'A file listed in the cell file (database.files)', schema: { ...FILE_NAME } };
   const drive = { name: 'drive', in: 'path', required: true, description: 'Drive id from GET /api/database/drives (at most 255 bytes in UTF-8)', schema: { ...DRIVE_ID } };

@@ -18,13 +18,19 @@ const LANE_IDS = ['alarms', 'process', 'mode'];
  *   timeline: {lanes: Lane[]}}} RecordingDetail
  */
 
+/** A client error: its status and message, and the same as a stable code and params for the app (`recorder.not_found` {name}). */
 export class RecordingError extends Error {
-  /** @param {number} status @param {string} message */
-  constructor(status, message) {
+  /** @param {number} status @param {string} message @param {string} [code] @param {Record<string, string | number>} [params] */
+  constructor(status, message, code = undefined, params = undefined) {
     super(message);
     this.status = status;
+    this.code = code;
+    this.params = params;
   }
 }
+
+/** @param {string} name */
+const notFound = (name) => new RecordingError(404, `no recording ${name}`, 'recorder.not_found', { name });
 
 /** @param {any} s @param {import('../../core/config/env.js').Env} env */
 export const recordingsDir = (s, env) => (typeof s?.directory === 'string' ? path.resolve(s.directory) : path.join(env.dataDir, 'recordings'));
@@ -40,7 +46,7 @@ export class Recordings {
 
   /** @param {string} name @returns {string} the file's path; 400 for a name that is not a recording's */
   pathOf(name) {
-    if (!NAME_RE.test(name)) throw new RecordingError(400, `not a recording's name: ${JSON.stringify(name.slice(0, 80))}`);
+    if (!NAME_RE.test(name)) throw new RecordingError(400, `not a recording's name: ${JSON.stringify(name.slice(0, 80))}`, 'recorder.invalid_name', { name: name.slice(0, 80) });
     return path.join(this.dir, name);
   }
 
@@ -69,10 +75,10 @@ export class Recordings {
     try {
       st = await fsp.stat(file);
     } catch (e) {
-      if (/** @type {any} */ (e).code === 'ENOENT') throw new RecordingError(404, `no recording ${name}`);
+      if (/** @type {any} */ (e).code === 'ENOENT') throw notFound(name);
       throw e;
     }
-    if (!st.isFile()) throw new RecordingError(404, `no recording ${name}`);
+    if (!st.isFile()) throw notFound(name);
     /** @type {any} */
     let d = null;
     try {
@@ -103,12 +109,12 @@ export class Recordings {
   async open(name) {
     const file = this.pathOf(name);
     const handle = await fsp.open(file, 'r').catch((e) => {
-      throw e.code === 'ENOENT' ? new RecordingError(404, `no recording ${name}`) : e;
+      throw e.code === 'ENOENT' ? notFound(name) : e;
     });
     const st = await handle.stat();
     if (!st.isFile()) {
       await handle.close();
-      throw new RecordingError(404, `no recording ${name}`);
+      throw notFound(name);
     }
     return { size: st.size, stream: handle.createReadStream() };
   }
@@ -119,7 +125,7 @@ export class Recordings {
     try {
       await fsp.unlink(file);
     } catch (e) {
-      if (/** @type {any} */ (e).code === 'ENOENT') throw new RecordingError(404, `no recording ${name}`);
+      if (/** @type {any} */ (e).code === 'ENOENT') throw notFound(name);
       throw e;
     }
     await fsp.unlink(this.sidecarOf(name)).catch(() => {});

@@ -3,7 +3,7 @@
 import { pipeline } from 'node:stream/promises';
 import { Router } from 'express';
 import { RecordingError, RECORDING_NAME } from './recordings.js';
-import { httpError } from '../../core/http/errors.js';
+import { errorBody, httpError } from '../../core/http/errors.js';
 
 /**
  * @param {{recordings: import('./recordings.js').Recordings, canDelete: (role: string) => boolean,
@@ -21,10 +21,10 @@ export function recorderRoutes({ recordings, canDelete, guard, audit, log = (m) 
   /** @param {import('express').Response} res @param {any} e */
   const fail = (res, e) => {
     if (res.headersSent) return void res.destroy();
-    if (e instanceof RecordingError) return void res.status(e.status).json({ error: e.message });
+    if (e instanceof RecordingError) return void res.status(e.status).json(e.code ? errorBody(e.message, e.code, e.params) : { error: e.message });
     const h = httpError(e);
     if (!h.clientError) log(`recorder: ${e?.stack || e}`);
-    res.status(h.status).json({ error: h.clientError ? h.message : 'internal error' });
+    res.status(h.status).json(!h.clientError ? { error: 'internal error' } : h.code ? errorBody(h.message, h.code, h.params) : { error: h.message });
   };
 
   r.get('/api/recorder/recordings', ...guard, async (req, res) => {
@@ -62,7 +62,7 @@ export function recorderRoutes({ recordings, canDelete, guard, audit, log = (m) 
   });
   r.delete('/api/recorder/recordings/:name', ...guard, async (req, res) => {
     try {
-      if (!canDelete(req.session.role)) throw new RecordingError(403, `role ${req.session.role} may not delete recordings`);
+      if (!canDelete(req.session.role)) throw new RecordingError(403, `role ${req.session.role} may not delete recordings`, 'recorder.delete_denied', { role: req.session.role });
       await recordings.remove(name(req));
       await record(req, 'recorder.delete', 'ok');
       res.json({ deleted: name(req) });
@@ -77,7 +77,8 @@ export function recorderRoutes({ recordings, canDelete, guard, audit, log = (m) 
 /** OpenAPI 3.1 paths of these routes (the core adds 401, 403 for the page, 405). */
 export const recorderOpenApiPaths = (() => {
   const json = (schema) => ({ content: { 'application/json': { schema } } });
-  const err = (description) => ({ description, ...json({ type: 'object', required: ['error'], properties: { error: { type: 'string' } } }) });
+  // code and params: a stable code ("recorder.not_found") and the values in the message, for the app to say in the user's language.
+  const err = (description) => ({ description, ...json({ type: 'object', required: ['error'], properties: { error: { type: 'string' }, code: { type: 'string' }, params: { type: 'object' } } }) });
   const name = { name: 'name', in: 'path', required: true, description: 'A recording\'s file name', schema: { ...RECORDING_NAME } };
   const recording = {
     type: 'object', required: ['name', 'at_ms', 'reason', 'size', 'duration_s', 'messages', 'alarms'],

@@ -6,7 +6,7 @@ import fsp from 'node:fs/promises';
 import path from 'node:path';
 import { Router } from 'express';
 import { CellConfigError } from '../../core/config/cell.js';
-import { httpError } from '../../core/http/errors.js';
+import { errorBody, httpError } from '../../core/http/errors.js';
 import { armSpecs, urdfPath, urdfFileProblems } from './arms.js';
 import { SceneError, MAX_URDF_BYTES, getParam, prepareUrdf, etagOf, meshPath, meshType, isMeshFile } from './urdf.js';
 
@@ -39,39 +39,51 @@ export function sceneRoutes({ section, cell, cellFile, env, guard, log = (m) => 
   /** @param {import('express').Request} req */
   const armOf = (req) => {
     const arm = arms.get(param(req, 'group'));
-    if (!arm) throw new SceneError(404, `no arm "${param(req, 'group').slice(0, 64)}" in this cell's scene (arms: ${[...arms.keys()].join(', ') || 'none'})`);
+    if (!arm) {
+      const group = param(req, 'group').slice(0, 64);
+      const list = [...arms.keys()].join(', ');
+      throw new SceneError(404, `no arm "${group}" in this cell's scene (arms: ${list || 'none'})`, 'scene.no_arm', { arm: group, arms: list });
+    }
     return arm;
   };
 
   /** Read an arm's URDF from its source, check it, rewrite its meshes and remember them. @param {import('./arms.js').ArmSpec} arm */
   async function readUrdf(arm) {
     const src = arm.source;
-    if (!src) throw new SceneError(404, `the arm "${arm.group}" has no URDF (scene.arms[].robot_description or urdf)`);
+    if (!src) throw new SceneError(404, `the arm "${arm.group}" has no URDF (scene.arms[].robot_description or urdf)`, 'scene.arm_no_urdf', { arm: arm.group });
     let text;
     let baseDir;
     let what;
+    /** @type {{file: string} | {param: string}} for the errors' codes */
+    let source;
     if (src.kind === 'file') {
       const file = urdfPath(src.file, cellDir);
-      what = `the URDF file ${path.basename(src.file)}`; // its name, not where it lies
+      const name = path.basename(src.file); // its name, not where it lies
+      what = `the URDF file ${name}`;
+      source = { file: name };
       try {
         const st = await fsp.stat(file);
         if (!st.isFile()) throw Object.assign(new Error('not a file'), { code: 'EISDIR' });
-        if (st.size > MAX_URDF_BYTES) throw new SceneError(422, `${what} is larger than ${MAX_URDF_BYTES} bytes`);
+        if (st.size > MAX_URDF_BYTES) throw new SceneError(422, `${what} is larger than ${MAX_URDF_BYTES} bytes`, 'scene.file_too_large', { file: name, limit: MAX_URDF_BYTES });
         text = await fsp.readFile(file, 'utf8');
       } catch (e) {
         if (e instanceof SceneError) throw e;
-        throw new SceneError(404, `${what} (${src.field}) cannot be read (${e.code || 'error'})`);
+        const reason = e.code || 'error';
+        throw new SceneError(404, `${what} (${src.field}) cannot be read (${reason})`, 'scene.file_unreadable', { file: name, field: src.field, reason });
       }
       baseDir = path.dirname(file);
     } else {
       what = `the parameter ${src.name}`;
+      source = { param: src.name };
       const value = await getParam(env.rosMasterUri, src.name, { timeoutMs });
-      if (typeof value !== 'string') throw new SceneError(422, `${what} does not hold a URDF: it holds ${describeValue(value)}, not a string`);
+      if (typeof value !== 'string') {
+        throw new SceneError(422, `${what} does not hold a URDF: it holds ${describeValue(value)}, not a string`, 'scene.param_not_string', { param: src.name });
+      }
       text = value;
       // A URDF from a parameter has no file: its relative mesh paths are taken from the cell file's directory.
       baseDir = cellDir;
     }
-    const out = prepareUrdf(text, arm.group, what);
+    const out = prepareUrdf(text, arm.group, what, source);
     known.set(arm.group, { meshes: out.meshes, baseDir });
     return out.text;
   }
@@ -105,26 +117,28 @@ export function sceneRoutes({ section, cell, cellFile, env, guard, log = (m) => 
       const arm = armOf(req);
       const i = param(req, 'i');
       const name = param(req, 'name');
-      const noMesh = () => new SceneError(404, `the URDF of the arm "${arm.group}" has no mesh ${i.slice(0, 16)} named ${name.slice(0, 255)}`);
+      const noMesh = () => new SceneError(404, `the URDF of the arm "${arm.group}" has no mesh ${i.slice(0, 16)} named ${name.slice(0, 255)}`,
+        'scene.no_mesh', { arm: arm.group, index: i.slice(0, 16), name: name.slice(0, 255) });
       if (!/^(0|[1-9][0-9]{0,5})$/.test(i)) throw noMesh();
       if (!known.has(arm.group)) await urdfOf(arm);
       const { meshes, baseDir } = known.get(arm.group);
       const mesh = meshes[Number(i)];
       if (!mesh || mesh.name !== name) throw noMesh();
       // Only mesh formats the view draws: a URDF (any node may set the parameter) must not make the BFF a file server.
-      if (!isMeshFile(mesh.name)) throw new SceneError(404, `the mesh ${mesh.name} is not served: only .stl, .dae and .obj meshes are`);
+      if (!isMeshFile(mesh.name)) throw new SceneError(404, `the mesh ${mesh.name} is not served: only .stl, .dae and .obj meshes are`, 'scene.mesh_format', { name: mesh.name });
       const where = meshPath(mesh.filename, baseDir, rosPackagePath());
-      if ('error' in where) throw new SceneError(404, `the mesh ${mesh.name} cannot be read: ${where.error}`);
+      if ('error' in where) throw new SceneError(404, `the mesh ${mesh.name} cannot be read: ${where.error}`, where.code, { name: mesh.name, ...where.params });
       const real = realpath(where.file);
       if (privateFiles.has(real) || privateDirs.some((d) => real === d || real.startsWith(d + path.sep))) {
-        throw new SceneError(404, `the mesh ${mesh.name} cannot be read: it lies among the BFF's own files`);
+        throw new SceneError(404, `the mesh ${mesh.name} cannot be read: it lies among the BFF's own files`, 'scene.mesh_private', { name: mesh.name });
       }
       res.sendFile(real, {
         dotfiles: 'allow', // meshes may live under a hidden directory (a venv's pybullet_data, ~/.ros)
         headers: { 'Content-Type': meshType(mesh.name), 'Cache-Control': `private, max-age=${MESH_MAX_AGE_S}` },
       }, (err) => {
         if (!err || res.headersSent) return;
-        sendError(res, new SceneError(404, `the mesh ${mesh.name} cannot be read (${/** @type {any} */ (err).code || 'not a file'})`), log);
+        const reason = /** @type {any} */ (err).code || 'not a file';
+        sendError(res, new SceneError(404, `the mesh ${mesh.name} cannot be read (${reason})`, 'scene.mesh_unreadable', { name: mesh.name, reason }), log);
       });
     } catch (e) {
       sendError(res, e, log);
@@ -160,9 +174,9 @@ function sendError(res, e, log) {
   res.setHeader('Cache-Control', 'no-store');
   res.removeHeader('ETag');
   res.removeHeader('Content-Type');
-  if (e instanceof SceneError) return res.status(e.status).json({ error: e.message });
+  if (e instanceof SceneError) return res.status(e.status).json(e.code ? errorBody(e.message, e.code, e.params) : { error: e.message });
   const h = httpError(e);
-  if (h.clientError) return res.status(h.status).json({ error: h.message });
+  if (h.clientError) return res.status(h.status).json(h.code ? errorBody(h.message, h.code, h.params) : { error: h.message });
   log(`scene: ${/** @type {any} */ (e)?.stack || e}`);
   res.status(500).json({ error: 'internal error' });
 }
@@ -173,7 +187,8 @@ function sendError(res, e, log) {
  */
 export const sceneOpenApiPaths = (() => {
   const json = (schema) => ({ content: { 'application/json': { schema } } });
-  const error = { type: 'object', required: ['error'], properties: { error: { type: 'string' } } };
+  // code and params: a stable code ("scene.param_unset") and the values in the message, for the app to say in the user's language.
+  const error = { type: 'object', required: ['error'], properties: { error: { type: 'string' }, code: { type: 'string' }, params: { type: 'object' } } };
   const err = (description) => ({ description, ...json(error) });
   const group = { name: 'group', in: 'path', required: true, description: 'An arm of the scene section (scene.arms[].group)', schema: { type: 'string', pattern: '^[a-z][a-z0-9_]*$' } };
   const etag = { ETag: { description: 'Validator for If-None-Match', schema: { type: 'string' } } };

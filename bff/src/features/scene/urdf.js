@@ -9,11 +9,14 @@ import { createHash } from 'node:crypto';
 import { fileURLToPath } from 'node:url';
 import { DOMParser, XMLSerializer, onErrorStopParsing } from '@xmldom/xmldom';
 
+/** A client error: its status, a message that names no server path, and the same as a stable code and params for the app. */
 export class SceneError extends Error {
-  /** @param {number} status @param {string} message */
-  constructor(status, message) {
+  /** @param {number} status @param {string} message @param {string} [code] @param {Record<string, string | number>} [params] */
+  constructor(status, message, code = undefined, params = undefined) {
     super(message);
     this.status = status;
+    this.code = code;
+    this.params = params;
   }
 }
 
@@ -91,17 +94,20 @@ export function parseMethodResponse(text) {
  * @returns {Promise<string>}
  */
 function postXmlRpc(masterUri, body, { timeoutMs = MASTER_TIMEOUT_MS } = {}) {
-  const down = (why = '') => new SceneError(409, `the ROS master at ${masterUri} does not answer${why}: the URDF parameter cannot be read`);
+  /** @param {string} why @param {string} code @param {Record<string, string>} [more] */
+  const fails = (why, code, more = {}) => new SceneError(409, `the ROS master at ${masterUri} does not answer${why}: the URDF parameter cannot be read`, code, { master: masterUri, ...more });
+  const down = () => fails('', 'scene.master_down');
+  const badUri = (/** @type {string} */ why) => fails(why, 'scene.master_bad_uri');
   return new Promise((resolve, reject) => {
     let url;
     try {
       url = new URL(masterUri);
     } catch {
-      reject(down(' (not a URI)'));
+      reject(badUri(' (not a URI)'));
       return;
     }
     if (url.protocol !== 'http:') {
-      reject(down(' (not an http:// URI)'));
+      reject(badUri(' (not an http:// URI)'));
       return;
     }
     const req = http.request({
@@ -115,11 +121,11 @@ function postXmlRpc(masterUri, body, { timeoutMs = MASTER_TIMEOUT_MS } = {}) {
         size += c.length;
         if (size > MAX_URDF_BYTES) {
           req.destroy();
-          reject(new SceneError(422, `the ROS master's answer is larger than ${MAX_URDF_BYTES} bytes: not a URDF this view can load`));
+          reject(new SceneError(422, `the ROS master's answer is larger than ${MAX_URDF_BYTES} bytes: not a URDF this view can load`, 'scene.master_answer_too_large', { limit: MAX_URDF_BYTES }));
         } else chunks.push(c);
       });
       res.on('end', () => {
-        if (res.statusCode !== 200) reject(down(` with XML-RPC (HTTP ${res.statusCode})`));
+        if (res.statusCode !== 200) reject(fails(` with XML-RPC (HTTP ${res.statusCode})`, 'scene.master_not_xmlrpc', { detail: `HTTP ${res.statusCode}` }));
         else resolve(Buffer.concat(chunks).toString('utf8'));
       });
       res.on('error', () => reject(down()));
@@ -148,14 +154,20 @@ export async function getParam(masterUri, key, o = {}) {
   try {
     answer = parseMethodResponse(text);
   } catch (e) {
-    throw new SceneError(409, `the ROS master at ${masterUri} does not answer with XML-RPC (${parseProblem(e)}): the URDF parameter cannot be read`);
+    const detail = parseProblem(e);
+    throw new SceneError(409, `the ROS master at ${masterUri} does not answer with XML-RPC (${detail}): the URDF parameter cannot be read`,
+      'scene.master_not_xmlrpc', { master: masterUri, detail });
   }
-  if ('fault' in answer) throw new SceneError(409, `the ROS master at ${masterUri} refused getParam ${key}: ${answer.fault.slice(0, 200)}`);
+  if ('fault' in answer) {
+    const detail = answer.fault.slice(0, 200);
+    throw new SceneError(409, `the ROS master at ${masterUri} refused getParam ${key}: ${detail}`, 'scene.master_refused', { master: masterUri, param: key, detail });
+  }
   const v = answer.value;
   if (!Array.isArray(v) || v.length < 3 || typeof v[0] !== 'number') {
-    throw new SceneError(409, `the ROS master at ${masterUri} answered getParam with no [code, statusMessage, value]: the URDF parameter cannot be read`);
+    throw new SceneError(409, `the ROS master at ${masterUri} answered getParam with no [code, statusMessage, value]: the URDF parameter cannot be read`,
+      'scene.master_bad_answer', { master: masterUri });
   }
-  if (v[0] !== 1) throw new SceneError(404, `no URDF on the parameter ${key} (is the arm's driver up?)`);
+  if (v[0] !== 1) throw new SceneError(404, `no URDF on the parameter ${key} (is the arm's driver up?)`, 'scene.param_unset', { param: key });
   return v[2];
 }
 
@@ -186,17 +198,26 @@ export function meshName(filename) {
  * Check that text is a URDF (a well-formed XML document whose root is <robot>) and rewrite every
  * <mesh filename="..."> to the mesh route: mesh i of the distinct filenames, in document order.
  * @param {string} text @param {string} group @param {string} what names the source in messages ("the parameter /x")
+ * @param {{param: string} | {file: string}} [source] the same for the errors' codes: a parameter's name or a file's
+ *   (scene.param_not_urdf {param, detail}, scene.file_root_not_robot {file, root}, ...)
  * @returns {{text: string, meshes: MeshRef[]}}
  */
-export function prepareUrdf(text, group, what) {
+export function prepareUrdf(text, group, what, source = undefined) {
+  /** A 422 naming the source. @param {string} problem @param {[string, string]} codes for a parameter, for a file @param {Record<string, string>} more */
+  const notUrdf = (problem, [paramCode, fileCode], more) => new SceneError(422, `${what} does not hold a URDF: ${problem}`,
+    source && ('param' in source ? paramCode : fileCode), source && { ...source, ...more });
   let doc;
   try {
     doc = parser().parseFromString(text, 'text/xml');
   } catch (e) {
-    throw new SceneError(422, `${what} does not hold a URDF: ${parseProblem(e)}`);
+    const detail = parseProblem(e);
+    throw notUrdf(detail, ['scene.param_not_urdf', 'scene.file_not_urdf'], { detail });
   }
   const root = doc.documentElement;
-  if (root?.nodeName !== 'robot') throw new SceneError(422, `${what} does not hold a URDF: its root element is <${root?.nodeName}>, not <robot>`);
+  if (root?.nodeName !== 'robot') {
+    const name = String(root?.nodeName);
+    throw notUrdf(`its root element is <${name}>, not <robot>`, ['scene.param_root_not_robot', 'scene.file_root_not_robot'], { root: name });
+  }
   /** @type {MeshRef[]} */
   const meshes = [];
   /** @type {Map<string, number>} */
@@ -281,11 +302,12 @@ export function findPackage(pkg, rosPackagePath) {
 }
 
 /**
- * The absolute path of a mesh filename, or why there is none (a reason that names no server path).
+ * The absolute path of a mesh filename, or why there is none (a reason that names no server path, with its code
+ * and params for the app: scene.mesh_not_local, scene.mesh_no_package {package}, scene.mesh_scheme {scheme}).
  * @param {string} filename as the URDF gives it
  * @param {string} baseDir what a relative filename is relative to (the URDF file's directory)
  * @param {string} rosPackagePath
- * @returns {{file: string} | {error: string}}
+ * @returns {{file: string} | {error: string, code: string, params?: Record<string, string>}}
  */
 export function meshPath(filename, baseDir, rosPackagePath) {
   const f = filename.trim();
@@ -293,15 +315,15 @@ export function meshPath(filename, baseDir, rosPackagePath) {
     try {
       return { file: fileURLToPath(f) };
     } catch {
-      return { error: 'not a file:// URI of this computer' };
+      return { error: 'not a file:// URI of this computer', code: 'scene.mesh_not_local' };
     }
   }
   const pkg = /^package:\/\/([^/]+)\/(.+)$/i.exec(f);
   if (pkg) {
     const dir = findPackage(pkg[1], rosPackagePath);
-    return dir ? { file: path.join(dir, pkg[2]) } : { error: `the package "${pkg[1]}" is not on ROS_PACKAGE_PATH` };
+    return dir ? { file: path.join(dir, pkg[2]) } : { error: `the package "${pkg[1]}" is not on ROS_PACKAGE_PATH`, code: 'scene.mesh_no_package', params: { package: pkg[1] } };
   }
   const scheme = /^([a-z][a-z0-9+.-]*):\/\//i.exec(f);
-  if (scheme) return { error: `${scheme[1]}:// URIs are not served` };
+  if (scheme) return { error: `${scheme[1]}:// URIs are not served`, code: 'scene.mesh_scheme', params: { scheme: scheme[1] } };
   return { file: path.resolve(baseDir, f) };
 }

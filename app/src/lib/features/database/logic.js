@@ -12,6 +12,7 @@
  */
 import { m } from '$lib/paraglide/messages.js';
 import { request } from '../../core/api.js';
+import { errorText } from '../../core/errors.js';
 import { fmtNumber, fmtFixed, fmtDateTime, getLocale } from '../../core/i18n.js';
 
 export const FEATURE_ID = 'database';
@@ -70,7 +71,7 @@ export function uploadFile(url, file, o = {}) {
       }
       const status = xhr.status;
       if (status >= 200 && status < 300) return resolve({ kind: 'ok', status, data });
-      const error = (data && typeof data.error === 'string' && data.error) || xhr.statusText || `HTTP ${status}`;
+      const error = errorText(data) || xhr.statusText || `HTTP ${status}`;
       if (status === 401) return resolve({ kind: 'unauthorized', status: 401, error, data });
       if (status === 403) return resolve({ kind: 'forbidden', status: 403, error, data });
       resolve({ kind: 'error', status, error, data });
