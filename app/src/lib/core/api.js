@@ -4,7 +4,6 @@
  * "logged out" (401) from "offline" (network error) without try/catch chains.
  * A refusal's `error` is in the user's language when the BFF gave its code (core/errors.js).
  */
-import { errorText } from './errors.js';
 
 /**
  * @typedef {{ kind: 'ok', status: number, data: any }
@@ -46,10 +45,27 @@ export async function request(method, path, body, fetchImpl = globalThis.fetch, 
   }
   const data = await readJson(res);
   if (res.ok) return { kind: 'ok', status: res.status, data };
-  const error = errorText(data) || res.statusText || `HTTP ${res.status}`;
+  const error = (await sayError(data)) || res.statusText || `HTTP ${res.status}`;
   if (res.status === 401) return { kind: 'unauthorized', status: 401, error, data };
   if (res.status === 403) return { kind: 'forbidden', status: 403, error, data };
   return { kind: 'error', status: res.status, error, data };
+}
+
+/**
+ * An error body in the user's language. The catalogue of error texts is loaded with the first coded error, so the
+ * login page does not carry it; without it (offline before it was cached) the BFF's English text.
+ * @param {any} data
+ */
+async function sayError(data) {
+  if (data && typeof data.code === 'string') {
+    try {
+      const { errorText } = await import('./errors.js');
+      return errorText(data);
+    } catch {
+      /* not loadable: the English below */
+    }
+  }
+  return data && typeof data.error === 'string' ? data.error : '';
 }
 
 /** @param {Response} res */

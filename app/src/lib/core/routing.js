@@ -102,12 +102,4 @@ export function robotStop(config) {
   return { service: stop.service, type: stop.type || 'std_srvs/Trigger' };
 }
 
-/**
- * Where to go after login: only same-origin absolute paths, never the login page itself.
- * @param {string | null | undefined} next
- */
-export function safeNext(next) {
-  if (!next || !next.startsWith('/') || next.startsWith('//') || next.startsWith('/\\')) return '/';
-  if (next === '/login' || next.startsWith('/login?') || next.startsWith('/login/')) return '/';
-  return next;
-}
+export { safeNext } from './safe-next.js';
