@@ -1,0 +1,7 @@
+// The accessibility audit (axe-core on every page in every theme, glove mode) against the demo cell's stack, on the
+// three profiles: `npm run a11y -w e2e`. Not yet part of `npm test`: run after the whole suite on the tablet and
+// desktop profiles it found contrast problems that a run on its own does not show (see docs/i18n.md).
+import { defineConfig } from '@playwright/test';
+import base from './playwright.config.js';
+
+export default defineConfig({ ...base, testDir: './a11y' });
