@@ -68,6 +68,8 @@ test('a language chosen in the user menu is kept with the account: a new login e
   try {
     const p2 = await other.newPage();
     await signIn(p2, 'operator', 'Iniciar sesión');
+    // The page after the login is already drawn in the account's language.
+    await expect(p2.locator('html')).toHaveAttribute('lang', 'fi');
     await p2.goto('/process');
     await expect(p2.getByTestId('page-title')).toHaveText('Prosessi');
     await expect(p2.getByTestId('operation').first()).toContainText('Poimi kappale');

@@ -104,7 +104,8 @@ describe("the account's language", () => {
     const a = api({ me: { kind: 'ok', status: 200, data: { username: 'ann', role: 'operator', locale: 'fi' } } });
     const s = new Session({ api: a, storage: null, locale });
     await s.refresh();
-    expect(locale.adopt).toHaveBeenCalledWith('fi');
+    expect(locale.adopt).toHaveBeenCalledWith('fi', { reload: true });
+    expect(s.loadNextAfresh).toBe(false);
     expect(await s.setLanguage('es')).toEqual({ ok: true });
     expect(a.preferences).toHaveBeenCalledWith({ locale: 'es' });
     expect(locale.switchTo).toHaveBeenLastCalledWith('es');
@@ -113,6 +114,18 @@ describe("the account's language", () => {
     expect(locale.switchTo).toHaveBeenLastCalledWith(null);
     await s.logout();
     expect(locale.forget).toHaveBeenCalled();
+  });
+  it('taken at a login without a reload: the login page loads the next page afresh, once the login has finished', async () => {
+    const locale = { adopt: vi.fn(() => true), forget: vi.fn(), switchTo: vi.fn() };
+    const a = api({ me: { kind: 'ok', status: 200, data: { username: 'ann', role: 'operator', locale: 'fi' } } });
+    a.login = async () => ({ kind: 'ok', status: 200, data: { username: 'ann', role: 'operator', locale: 'fi' } });
+    const s = new Session({ api: a, storage: null, locale });
+    const during = s.login('ann', 'pw');
+    expect(s.signingIn).toBe(true);
+    expect(await during).toEqual({ ok: true });
+    expect(s.signingIn).toBe(false);
+    expect(locale.adopt).toHaveBeenCalledWith('fi', { reload: false });
+    expect(s.loadNextAfresh).toBe(true);
   });
   it('a refused or offline save changes nothing and says why', async () => {
     const locale = { adopt: vi.fn(() => false), forget: vi.fn(), switchTo: vi.fn() };

@@ -33,11 +33,12 @@ export function switchLocale(locale) {
 /**
  * The account's language after a login or a refresh: apply it when it differs from the one in use.
  * @param {unknown} locale
- * @returns {boolean} true when the page is about to reload in that language
+ * @param {{ reload?: boolean }} [opts] reload false: only keep it; the caller loads the next page afresh
+ * @returns {boolean} true when the language changed (and, by default, the page is about to reload in it)
  */
-export function adoptAccountLocale(locale) {
+export function adoptAccountLocale(locale, { reload = true } = {}) {
   if (!isLocale(locale) || locale === getLocale()) return false;
-  setLocale(locale);
+  setLocale(locale, { reload });
   return true;
 }
 

@@ -39,13 +39,20 @@ export class Session {
   /** @type {AuthState} */
   auth = $state('unknown');
   offline = $state(false);
+  /** A login is under way: the login page waits for its end before it leaves. */
+  signingIn = $state(false);
+  /**
+   * The account's language was taken at the login: the next page must be loaded as a new document, in it
+   * (not a reload racing the client-side navigation).
+   */
+  loadNextAfresh = false;
 
   /**
    * @param {object} [deps]
    * @param {typeof defaultApi} [deps.api]
    * @param {Storage | null} [deps.storage]
-   * @param {{ adopt: (locale: unknown) => boolean, forget: () => void, switchTo: (locale: any) => void }} [deps.locale]
-   *   applying the account's language (the page reloads in it)
+   * @param {{ adopt: (locale: unknown, opts?: { reload?: boolean }) => boolean, forget: () => void, switchTo: (locale: any) => void }} [deps.locale]
+   *   applying the account's language (the page reloads in it unless reload is false)
    */
   constructor(deps = {}) {
     this.api = deps.api ?? defaultApi;
@@ -55,9 +62,10 @@ export class Session {
 
   /**
    * Ask the server who we are and what we may see. Offline: fall back to the cache.
+   * @param {{ reloadForLocale?: boolean }} [opts] false at a login: a changed language sets loadNextAfresh instead
    * @returns {Promise<AuthState>}
    */
-  async refresh() {
+  async refresh({ reloadForLocale = true } = {}) {
     if (this.#get(PENDING_LOGOUT_KEY)) {
       const out = await this.api.logout();
       if (out.kind === 'offline') return this.#goOffline();
@@ -80,7 +88,7 @@ export class Session {
     this.auth = 'authenticated';
     this.#save();
     // The language chosen on any device follows the account here.
-    this.locale.adopt(me.data?.locale);
+    if (this.locale.adopt(me.data?.locale, { reload: reloadForLocale }) && !reloadForLocale) this.loadNextAfresh = true;
     return this.auth;
   }
 
@@ -89,6 +97,16 @@ export class Session {
    * @returns {Promise<{ ok: true } | { ok: false, error: string }>}
    */
   async login(username, password) {
+    this.signingIn = true;
+    try {
+      return await this.#login(username, password);
+    } finally {
+      this.signingIn = false;
+    }
+  }
+
+  /** @param {string} username @param {string} password */
+  async #login(username, password) {
     const r = await this.api.login(username, password);
     if (r.kind === 'offline') {
       this.offline = true;
@@ -100,8 +118,8 @@ export class Session {
     this.user = r.data;
     this.auth = 'authenticated';
     // Pull the role's config right away so the menu is complete on the first screen.
-    await this.refresh();
-    return { ok: true };
+    await this.refresh({ reloadForLocale: false });
+    return /** @type {const} */ ({ ok: true });
   }
 
   /**
