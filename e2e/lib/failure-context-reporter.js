@@ -4,7 +4,7 @@
 // folder, and may attach it only after the test's end is reported: so the snapshot is read from that folder (found
 // from the result's attachments, e.g. its screenshot), now or at the end of the run. A matcher that failed on a
 // locator puts its own snapshot of the page under the error (a yaml block), and then there is no page snapshot.
-import { existsSync, readFileSync, statSync, openSync, readSync, closeSync } from 'node:fs';
+import { existsSync, readFileSync, readdirSync, statSync, openSync, readSync, closeSync } from 'node:fs';
 import path from 'node:path';
 
 /** @typedef {import('@playwright/test/reporter').TestCase} TestCase */
@@ -66,7 +66,7 @@ const errorText = (m) => (m ?? '').replace(/\x1b\[[0-9;]*m/g, '').split('\n').ma
 export default class FailureContextReporter {
   /** Failed tests whose error context was not written yet when their end was reported. @type {{title: string, file: string}[]} */
   pending = [];
-  /** Where the stack's log and audit log stood when each test began. @type {Map<string, {log: number, audit: number}>} */
+  /** Where the stack's log, audit log and ROS node logs stood when each test began. @type {Map<string, {log: number, audit: number, nodes: Map<string, number>}>} */
   marks = new Map();
 
   /** The stack's log and audit log (the stack is started by the global setup, which sets E2E_DATA_DIR). */
@@ -75,10 +75,23 @@ export default class FailureContextReporter {
     return dir ? { log: path.join(dir, 'stack.log'), audit: path.join(dir, 'audit.log') } : null;
   }
 
+  /**
+   * The ROS nodes' own log files (`output="log"` in the launch files: what a node logs through Python's logging,
+   * e.g. the manual driver's jog decisions, and rospy's topic connections), not in the stack log.
+   * @returns {string[]}
+   */
+  nodeLogs() {
+    const dir = process.env.E2E_DATA_DIR && path.join(process.env.E2E_DATA_DIR, 'ros', 'log');
+    if (!dir || !existsSync(dir)) return [];
+    const runs = readdirSync(dir, { withFileTypes: true }).filter((d) => d.isDirectory()).map((d) => path.join(dir, d.name));
+    return runs.flatMap((run) => readdirSync(run).filter((f) => /^[a-z_]+-\d+\.log$/.test(f) && !f.startsWith('roslaunch-'))
+      .map((f) => path.join(run, f)));
+  }
+
   /** @param {TestCase} test */
   onTestBegin(test) {
     const f = this.files();
-    if (f) this.marks.set(test.id, { log: sizeOf(f.log), audit: sizeOf(f.audit) });
+    if (f) this.marks.set(test.id, { log: sizeOf(f.log), audit: sizeOf(f.audit), nodes: new Map(this.nodeLogs().map((n) => [n, sizeOf(n)])) });
   }
 
   /** What the stack logged during the test (the last lines) and its control lease's audit entries. @param {TestCase} test */
@@ -96,8 +109,15 @@ export default class FailureContextReporter {
         return l;
       }
     });
+    // A node log started during the test (a respawned node) is read from its beginning.
+    const nodeLines = this.nodeLogs().flatMap((n) => {
+      const lines = readFrom(n, mark.nodes.get(n) ?? 0).split('\n').filter(Boolean);
+      const node = path.basename(n, '.log');
+      return lines.length ? [`${node} (last 20 of ${lines.length} lines):`, ...lines.slice(-20).map((l) => `  ${l}`)] : [];
+    });
     return [
       `stack log during the test (last 40 of ${logged.length} lines):`, ...logged.slice(-40).map((l) => `  ${l}`),
+      'ROS node logs during the test:', ...nodeLines.map((l) => `  ${l}`),
       `control lease audit entries during the test (${control.length}):`, ...control.map((l) => `  ${l}`),
     ];
   }

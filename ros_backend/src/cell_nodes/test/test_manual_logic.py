@@ -7,7 +7,8 @@ import math
 import threading
 import time
 from pathlib import Path
-from typing import Optional
+import logging
+from typing import Any, Optional
 
 import numpy as np
 import pytest
@@ -681,6 +682,27 @@ def test_a_jog_stopped_while_its_button_is_held_stays_stopped_until_a_new_press(
     d.jog("arm", "joint", 0, 0, 0.5, "base")
     d.jog("arm", "joint", 0, 1, 0.5, "base")
     assert len(robot.moves("speedJ")) == 6
+
+
+def test_why_a_held_button_does_not_move_the_arm_is_logged_once_per_press(robot: FakeRobot, caplog: Any) -> None:
+    """A held button that moves nothing must be explainable from the node's log (the e2e failure context shows it),
+    without a line per heartbeat."""
+    caplog.set_level(logging.INFO, logger="cell_nodes.manual")
+    clock = FakeClock()
+    d = make_driver(robot, clock=clock)
+    assert d.connect()
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=7)
+    assert d.stop()[0]
+    for _ in range(5):
+        clock.t += 0.05
+        d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=7)
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.9, press=8)  # late
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.9, press=8)
+    lines = [r.getMessage() for r in caplog.records if r.name == "cell_nodes.manual"]
+    assert [x for x in lines if x.startswith("jogging")] == ["jogging joint 1 + at 50 % (press 7)"]
+    assert lines.count("jog joint 1 + (press 7) held: this press was stopped") == 1
+    assert lines.count("jog joint 1 + (press 8) ignored: it came late") == 1
+    assert any(x.startswith("stopped") for x in lines), lines
 
 
 def test_a_refused_jog_start_is_tried_again_by_the_same_press(robot: FakeRobot) -> None:

@@ -187,6 +187,7 @@ class ManualDriver:
         self._sent: Optional[str] = None        # last motion command sent: "movej", "movel", "speedj", "speedl"
         self._message = ""
         self._fault = ""
+        self._noted: tuple[int, str] = (0, "")   # the last press whose jog was not carried out, and why (logged once)
         self._threads: list[threading.Thread] = []
         self._stop_event = threading.Event()
         # The node sets these: on_change -> publish the state now; on_sample -> /joint_states after each poll.
@@ -720,6 +721,8 @@ class ManualDriver:
                 self._end_reason = "stopped"
                 self._motion, self._progress = STOPPING, 1.0
             self._message = "stopped"
+            if sent is not None:
+                log.info("stopped (%s)", self._target or sent)
             ctl = self._ctl
             if ctl is not None and self._connected and sent is not None:
                 try:
@@ -923,6 +926,7 @@ class ManualDriver:
             # stopped nor keeps a jog alive, nor moves the arm for a session that lost control since it was sent.
             self._set_message(f"jog ignored: it arrived {age_s:.2f} s after it was sent (more than the jog timeout, "
                               f"{self._jog.timeout:.2f} s)")
+            self._note(cmd, "ignored: it came late")
             return
         try:
             g = self.find_group(group)
@@ -941,6 +945,7 @@ class ManualDriver:
                 return
             self._check_robot()
             if cmd.same_motion(self._jog.stopped):
+                self._note(cmd, "held: this press was stopped")
                 return  # (held: see jog.py; the state still says why it stopped)
             if self._jog.active is None or not cmd.same_motion(self._jog.active):
                 self._control()  # may upload the control script: not while holding the command lock
@@ -951,14 +956,23 @@ class ManualDriver:
             if self._motion in (MOVING, TOOL):
                 return
             decision = self._jog.command(cmd)
+            if decision is Decision.HELD:
+                self._note(cmd, "held: this press was stopped or released")
             if decision is not Decision.START:
                 return
             try:
                 self._start_jog(cmd, g)
+                log.info("jogging %s at %.0f %% (press %d)", cmd.label(), cmd.speed * 100, cmd.press)
             except Refused as e:
                 self._jog.clear(hold=False)  # it never moved: the press's next heartbeat tries again
                 self._set_idle(f"jog refused: {e}")
         self.on_change()
+
+    def _note(self, cmd: Jog, what: str) -> None:
+        """Log once per press why its jog was not carried out (its heartbeats come 20 times a second)."""
+        if self._noted != (cmd.press, what):
+            self._noted = (cmd.press, what)
+            log.info("jog %s (press %d) %s", cmd.label(), cmd.press, what)
 
     def refuse_jog(self, why: str) -> None:
         """A JogCommand that cannot be carried out: a running jog stops (never carry on after a bad or refused
@@ -1018,6 +1032,7 @@ class ManualDriver:
             self._token += 1
             self._motion, self._progress, self._sent = STOPPING, 1.0, None
             self._message = message
+            log.info("%s (%s)", message, jog.label() if jog is not None else self._target)
             if ctl is not None and self._connected:
                 try:
                     self._send_stop(ctl, sent if sent in ("speedj", "speedl") else "speedj", hard)
