@@ -1,5 +1,5 @@
-// Accessibility audit with axe-core on every page of the cell, in every theme (light, dark, high contrast) and in
-// glove mode, as the admin (who sees every page) with the live stack behind it: no serious or critical violation.
+// Accessibility audit with axe-core on every page of the cell, in every theme (light, dark, high contrast; on the phone)
+// and in glove mode, as the admin (who sees every page) with the live stack behind it: no serious or critical violation.
 // Glove mode: every visible control at least 64 px high. The results per page are written to
 // test-results/a11y-<profile>.json (the counts of every impact, for the record).
 import fs from 'node:fs';
@@ -11,6 +11,9 @@ import { simFault, clearGripperFault, recorderIdle } from '../lib/ros.js';
 
 const PAGES = ['/', '/modules', '/process', '/manual', '/scene', '/sensors', '/video', '/parameters', '/routines', '/alarms', '/recorder', '/inspect', '/database', '/plant', '/system'];
 const THEMES = ['light', 'dark', 'contrast'];
+// Every theme on the phone (the operator's device); the tablet's and desktop's layouts in the light theme only, to keep
+// the suite's time (colours are the same on every profile; what the layout changes, e.g. what scrolls, is not).
+const themes = () => (test.info().project.name === 'phone' ? THEMES : ['light']);
 
 /** @type {Record<string, Record<string, Record<string, Record<string, number>>>>} */
 const results = {};
@@ -39,7 +42,7 @@ async function audit(page, url, state) {
   await settle(page);
   /** @type {string[]} */
   const problems = [];
-  for (const theme of THEMES) {
+  for (const theme of themes()) {
     // What the menu's Theme choice does: the root's data-theme, drawn at once.
     await page.evaluate((t) => { document.documentElement.dataset.theme = t; }, theme);
     const r = await new AxeBuilder({ page }).withTags(['wcag2a', 'wcag2aa', 'wcag21a', 'wcag21aa']).analyze();
