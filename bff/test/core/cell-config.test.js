@@ -35,6 +35,8 @@ const broken = [
   ['module role that does not exist', (d) => { d.modules[0].roles = ['ghost']; }, /modules\[0\]\.roles\[0\]: unknown role "ghost"/],
   ['recorder decimating what is not a topic', (d) => { d.recorder.decimate_s = { 'camera frames': 2 }; }, /recorder\.decimate_s: must match pattern/],
   ['old motion section name', (d) => { d.motion = d.manual; }, /unknown field "motion"/],
+  ['an alarm text without its English', (d) => { d.alarms.texts['device.door_open'] = { es: 'Puerta abierta' }; }, /alarms\.texts\.device\.door_open/],
+  ['an alarm text in an unknown language', (d) => { d.alarms.texts['device.door_open'] = { en: 'Door open', xx: '?' }; }, /alarms\.texts\.device\.door_open/],
 ];
 for (const [name, mutate, expected] of broken) {
   test(`a cell file with ${name} is refused with the field named`, () => {

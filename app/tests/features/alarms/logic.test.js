@@ -1,5 +1,6 @@
 import { describe, it, expect } from 'vitest';
-import { alarmViews, bannerAlarm, statusView, severityView, rosTimeMs, activeCount } from '../../../src/lib/features/alarms/logic.js';
+import { alarmViews, bannerAlarm, statusView, severityView, rosTimeMs, activeCount, alarmText, statusText } from '../../../src/lib/features/alarms/logic.js';
+import { setLocale } from '../../../src/lib/paraglide/runtime.js';
 import { AlarmSignal } from '../../../src/lib/features/alarms/signal.svelte.js';
 
 const t = (/** @type {number} */ s) => ({ secs: s, nsecs: 0 });
@@ -58,5 +59,34 @@ describe('banner and badge', () => {
     expect(sig.badge).toBeNull();
     expect(sig.banner).toBeNull();
     expect(sig.alarms).toHaveLength(3);
+  });
+});
+
+
+describe("an alarm's words in the user's language", () => {
+  const force = alarmViews({ alarms: [{ id: 'force.limit', text: 'wrist force 1250 N above the 80.5 N limit (/cell/wrench)', code: 'force.limit',
+    params: [{ key: 'force', value: '1250' }, { key: 'limit', value: '80.5' }, { key: 'topic', value: '/cell/wrench' }], severity: 2, active: true, since: t(1), count: 1 }] })[0];
+  const device = { id: 'device.gripper_fault', text: 'Gripper fault: no answer', code: '', params: {} };
+  const texts = { 'device.gripper_fault': { en: 'Gripper fault', es: 'Fallo de la pinza' } };
+  it('says a coded alarm from the catalogue with its parameters (numbers in the locale), the cell file\'s by id first, else the robot PC\'s text', () => {
+    expect(force.code).toBe('force.limit');
+    expect(force.params).toEqual({ force: '1250', limit: '80.5', topic: '/cell/wrench' });
+    expect(alarmText(force)).toBe('wrist force 1,250 N above the 80.5 N limit (/cell/wrench)');
+    expect(alarmText(device)).toBe('Gripper fault: no answer');
+    expect(alarmText(device, texts)).toBe('Gripper fault');
+    // An unknown code (a newer node than this app): the node's own text.
+    expect(alarmText({ ...force, code: 'force.something_new' })).toBe(force.text);
+    setLocale('es', { reload: false });
+    try {
+      expect(alarmText(force)).toBe('fuerza en la muñeca de 1250 N, por encima del límite de 80,5 N (/cell/wrench)');
+      expect(alarmText(device, texts)).toBe('Fallo de la pinza');
+      expect(alarmText(device)).toBe('Gripper fault: no answer');
+      const status = { text: 'Robot arm: protective stop: …', code: 'robot.safety.protective_stop', params: [{ key: 'group', value: 'arm' }], alarm_id: 'robot.arm.protective_stop' };
+      expect(statusText(status)).toBe('Robot arm: parada de protección: el robot se ha detenido; elimine la causa y desbloquéelo');
+      expect(statusText({ text: 'no active alarm', code: '' })).toBe('ninguna alarma activa');
+      expect(statusText({ text: 'Gripper fault: no answer', code: '', alarm_id: 'device.gripper_fault' }, texts)).toBe('Fallo de la pinza');
+    } finally {
+      setLocale('en', { reload: false });
+    }
   });
 });

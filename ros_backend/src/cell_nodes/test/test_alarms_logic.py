@@ -599,3 +599,75 @@ def test_a_stale_or_malformed_memory_is_refused_and_the_core_starts_clean(change
     assert re.search(why, b.restore(memory))
     assert b.memory() == {"alarm_mode": "alarm", "previous": None, "seen": [], "want_alarm": False}
     assert b.settled(200.0)                                         # nothing remembered: nothing to wait for
+
+
+# ---------------------------------------------------------------------------------------------- codes for the app
+CATALOGUE = Path(__file__).resolve().parents[4] / "app" / "messages" / "alarms"
+
+
+def every_coded_alarm() -> list:
+    """Every kind of alarm the core raises, through its inputs (each safety and robot mode, a motion fault, a lost
+    controller, the force limit and its silence, a silent driver (heard before, and never), modules, diagnostics)."""
+    from cell_nodes.alarms.sources import ROBOT_MODE_ALARMS, SAFETY_ALARMS
+    from cell_nodes.diagnostics import DiagStatus, ERROR as D_ERROR, STALE as D_STALE, WARN as D_WARN
+    from cell_nodes.alarms.sources import diagnostic_conditions, module_conditions
+    from cell_nodes.alarms.config import DiagRule
+    out = []
+    for safety in [*SAFETY_ALARMS, "ODD_MODE"]:
+        out += robot_conditions_of(robot(safety=safety))
+    for mode in ROBOT_MODE_ALARMS:
+        out += robot_conditions_of(robot(mode=mode))
+    out += robot_conditions_of(robot(connected=False)) + robot_conditions_of({**robot(), "fault": "goal aborted"})
+    a = make(timeout_s=2)
+    a.on_robot_state("arm", robot(), 100.0)
+    a.on_wrench(WRENCH, wrench(fx=300.0), 100.0)
+    a.tick(103.0)
+    out += a.alarms()
+    c = cell(force_limit_n=80, timeout_s=2, startup_grace_s=10)
+    c["manual"] = {"groups": [{"name": "arm", "joints": ["elbow_joint"]}]}
+    b = Alarms(parse_alarms(c), 100.0)
+    b.tick(111.0)
+    out += b.alarms()
+    out += module_conditions([{"name": "vision", "state": "incomplete", "nodes": ["/a", "/b"], "alive": [True, False]},
+                              {"name": "io", "state": "incomplete", "message": "launch timed out"},
+                              {"name": "cam", "state": "incomplete"}])
+    rule = DiagRule("*", WARNING, ERROR, WARNING)
+    out += diagnostic_conditions([DiagStatus("cam", D_WARN, ""), DiagStatus("cam2", D_ERROR, ""),
+                                  DiagStatus("cam3", D_STALE, "last words")], [rule], 5.0)
+    return out
+
+
+def robot_conditions_of(state: dict) -> list:
+    from cell_nodes.alarms.sources import robot_conditions
+    return robot_conditions("arm", state)[1]
+
+
+def test_every_alarm_the_node_raises_has_a_code_the_app_says_in_every_language_with_the_same_parameters() -> None:
+    import json
+    alarms = every_coded_alarm()
+    codes = {x.code for x in alarms}
+    assert {"robot.safety.protective_stop", "robot.mode.power_off", "robot.disconnected", "robot.motion_fault",
+            "robot.safety_mode", "force.limit", "force.no_data", "robot.no_state", "robot.no_state_since_start",
+            "module.nodes_down", "module.incomplete", "module.incomplete_because", "diagnostics.stale", "diagnostics.warning",
+            "diagnostics.error"} <= codes
+    assert all(x.code for x in alarms), [x.id for x in alarms if not x.code]
+    for lang in ("en", "es", "fi", "de"):
+        catalogue = json.loads((CATALOGUE / f"{lang}.json").read_text())
+        for x in alarms:
+            key = "alarms_code_" + x.code.replace(".", "_")
+            assert key in catalogue, f"{lang}: no {key} for {x.id}"
+            assert set(re.findall(r"\{(\w+)\}", catalogue[key])) == {k for k, _ in x.params}, (lang, key, x.params)
+    # The English catalogue says what the node's own English text says.
+    en = json.loads((CATALOGUE / "en.json").read_text())
+    for x in alarms:
+        assert en["alarms_code_" + x.code.replace(".", "_")].format(**dict(x.params)) == x.text, x.id
+
+
+def test_the_status_names_its_alarm_with_code_and_parameters() -> None:
+    a = make()
+    a.on_robot_state("arm", robot(safety="PROTECTIVE_STOP"), 100.0)
+    st = a.status()
+    assert (st.alarm_id, st.code, st.params) == ("robot.arm.protective_stop", "robot.safety.protective_stop",
+                                                 (("group", "arm"),))
+    a.on_robot_state("arm", robot(), 101.0)
+    assert a.status().code == "" and a.status().text == "no active alarm"

@@ -132,6 +132,11 @@ def test_faults_become_alarms_switch_the_mode_and_reset_clears_them(cell) -> Non
     assert r.success and r.message == "cleared 1 inactive alarm (device.gripper_fault); " \
                                       "1 still active (robot.arm.protective_stop)"
     wait_for(lambda: active(alarms) == {"robot.arm.protective_stop": True}, 3, what="only the active alarm left")
+    # Its code and parameters go out with it, for the app to say it in the user's language.
+    stop = alarms.msg.alarms[0]
+    assert (stop.code, [(p.key, p.value) for p in stop.params]) == ("robot.safety.protective_stop", [("group", "arm")])
+    assert (status.msg.alarm_id, status.msg.code, [(p.key, p.value) for p in status.msg.params]) == \
+        ("robot.arm.protective_stop", "robot.safety.protective_stop", [("group", "arm")])
 
     # A late subscriber (another process) gets the current list at once: latched.
     out = subprocess.run(["rostopic", "echo", "-n", "1", "/cell/alarms/list"], capture_output=True, text=True,

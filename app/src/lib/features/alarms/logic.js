@@ -4,7 +4,7 @@
  */
 
 import { m } from '$lib/paraglide/messages.js';
-import { getLocale } from '../../core/i18n.js';
+import { getLocale, cellText, fmtNumber } from '../../core/i18n.js';
 
 export const FEATURE_ID = 'alarms';
 
@@ -34,7 +34,9 @@ export const severityView = (s) => {
  * @typedef {object} AlarmView
  * @property {string} key  id + the how-many-th activation: a new key is a new alarm for the banner
  * @property {string} id
- * @property {string | Record<string, string>} text  the cell file's (one per language, maybe): shown through cellText
+ * @property {string | Record<string, string>} text  the robot PC's text: shown through alarmText
+ * @property {string} code  what the text says, for the catalogue ('' : none; cell_msgs/Alarm)
+ * @property {Record<string, string>} params  the code's parameters
  * @property {number} severity
  * @property {boolean} active
  * @property {number | null} since  ms since the epoch (first seen)
@@ -67,6 +69,8 @@ export function alarmViews(msg) {
         key: `${a.id}#${count}@${since ?? 0}`,
         id: a.id,
         text: (typeof a.text === 'string' && a.text) || (a.text && typeof a.text === 'object') ? a.text : a.id,
+        code: typeof a.code === 'string' ? a.code : '',
+        params: paramsOf(a.params),
         severity: Number(a.severity) || 0,
         active: !!a.active,
         since,
@@ -77,6 +81,54 @@ export function alarmViews(msg) {
     })
     .sort((/** @type {AlarmView} */ a, /** @type {AlarmView} */ b) =>
       Number(b.active) - Number(a.active) || b.severity - a.severity || (b.since ?? 0) - (a.since ?? 0));
+}
+
+/**
+ * diagnostic_msgs/KeyValue[] (an alarm's parameters) as an object; anything else: none.
+ * @param {unknown} list @returns {Record<string, string>}
+ */
+export function paramsOf(list) {
+  /** @type {Record<string, string>} */
+  const out = {};
+  if (Array.isArray(list)) for (const kv of list) if (kv && typeof kv.key === 'string') out[kv.key] = String(kv.value ?? '');
+  return out;
+}
+
+/** The catalogue's functions by key, for the alarm codes (alarms_code_<code with . as _>). */
+const catalogue = /** @type {Record<string, ((p: Record<string, string>) => string) | undefined>} */ (/** @type {unknown} */ (m));
+
+/**
+ * An alarm's words in the user's language: the cell file's text for its id (alarms.texts), else the app's
+ * catalogue text of its code with its parameters (a plain number in the user's format), else the robot PC's own
+ * text (English, or a device's words).
+ * @param {{ id?: string, text: string | Record<string, string>, code?: string, params?: Record<string, string> }} a
+ * @param {Record<string, string | Record<string, string>>} [texts] the cell file's alarms.texts
+ * @returns {string}
+ */
+export function alarmText(a, texts) {
+  const own = a.id && texts && Object.hasOwn(texts, a.id) ? texts[a.id] : undefined;
+  if (own) return cellText(own);
+  const say = a.code ? catalogue[`alarms_code_${a.code.replaceAll('.', '_')}`] : undefined;
+  if (typeof say === 'function') {
+    /** @type {Record<string, string>} */
+    const p = {};
+    for (const [k, v] of Object.entries(a.params ?? {})) p[k] = /^-?\d+(\.\d+)?$/.test(v) ? fmtNumber(Number(v)) : v;
+    return say(p);
+  }
+  return cellText(a.text);
+}
+
+/**
+ * The safety status's text (cell_msgs/SafetyStatus: its most severe active alarm's, or "no active alarm") in the
+ * user's language, as alarmText says that alarm.
+ * @param {any} status @param {Record<string, string | Record<string, string>>} [texts]
+ * @returns {string}
+ */
+export function statusText(status, texts) {
+  const text = typeof status?.text === 'string' ? status.text : '';
+  if (!text) return '';
+  if (text === NO_ACTIVE_ALARM) return m.alarms_no_active_alarm();
+  return alarmText({ id: typeof status.alarm_id === 'string' ? status.alarm_id : '', text, code: typeof status.code === 'string' ? status.code : '', params: paramsOf(status.params) }, texts);
 }
 
 /**

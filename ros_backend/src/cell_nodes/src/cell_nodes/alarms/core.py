@@ -2,13 +2,14 @@
 reset clears, and the operation-mode switches. Every input carries its timestamp (seconds); no clock, no ROS."""
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any, Iterable, Mapping, Optional
 
 from ..diagnostics import DiagnosticsTracker, statuses_of
 from .config import AlarmsConfig, default_robot_state_topic
 from .mode import ModeKeeper, ModeRequest, memory_problem
 from .sources import (ForceWatch, RobotInfo, SilenceWatch, combined_robot, diagnostic_conditions, fault_conditions,
-                      field, module_conditions, robot_alarm_id, robot_conditions, robot_text, wrench_force)
+                      field, kv, module_conditions, robot_alarm_id, robot_conditions, robot_text, wrench_force)
 from .status import SafetyStatus, overall
 from .table import ERROR, WARNING, Alarm, AlarmTable, Condition
 
@@ -56,8 +57,7 @@ class Alarms:
     # ------------------------------------------------------------------------------------------ inputs
     def _report(self, key: str, conditions: Iterable[Condition], now: float) -> bool:
         sev = self.config.severity_for
-        changed = self.table.report(key, [Condition(c.id, c.text, sev(c.id, c.severity), c.source, c.since)
-                                          for c in conditions], now)
+        changed = self.table.report(key, [replace(c, severity=sev(c.id, c.severity)) for c in conditions], now)
         self._list_dirty |= changed
         return changed
 
@@ -146,7 +146,8 @@ class Alarms:
                 changed |= self._report(f"force.silence:{topic}", [Condition(
                     "force.no_data" + self._force_suffix(topic),
                     f"no wrist force reading on {topic} for {self.config.timeout_s:g} s: the force limit is not "
-                    f"supervised", WARNING, "force")], now)
+                    f"supervised", WARNING, "force", code="force.no_data",
+                    params=kv(topic=topic, seconds=f"{self.config.timeout_s:g}"))], now)
         changed |= self._diagnostics_report(now)   # statuses that fell silent become stale
         self.table.touch(now)
         return changed
@@ -163,10 +164,12 @@ class Alarms:
             heard = w.silence.last is not None
             for_how_long = (f"for {self.config.timeout_s:g} s" if heard
                             else f"since the start ({w.silence.grace:g} s)")
+            seconds = self.config.timeout_s if heard else w.silence.grace
             changed |= self._report(f"robot.silence:{w.group}", [Condition(
                 robot_alarm_id(w.group, "no_state"),
                 robot_text(w.group, f"no robot state from the driver on {w.topic} {for_how_long}"), ERROR,
-                "robot")], now)
+                "robot", code="robot.no_state" if heard else "robot.no_state_since_start",
+                params=kv(group=w.group, topic=w.topic, seconds=f"{seconds:g}"))], now)
         return changed
 
     # ------------------------------------------------------------------------------------------ commands

@@ -68,6 +68,11 @@ def robot_text(group: str, text: str) -> str:
     return f"Robot {group}: {text}"
 
 
+def kv(**params: object) -> tuple[tuple[str, str], ...]:
+    """An alarm's parameters (Alarm.msg params: diagnostic_msgs/KeyValue), in a stable order."""
+    return tuple((k, str(v)) for k, v in params.items())
+
+
 @dataclass(frozen=True)
 class RobotInfo:
     connected: bool = False
@@ -85,20 +90,25 @@ def robot_conditions(group: str, state: Any) -> tuple[RobotInfo, list[Condition]
         host = field(state, "controller", "") or "?"
         return RobotInfo(False, "", ""), [Condition(robot_alarm_id(group, "disconnected"),
                                                     robot_text(group, f"robot controller at {host} is unreachable"),
-                                                    ERROR, "robot")]
+                                                    ERROR, "robot", code="robot.disconnected",
+                                                    params=kv(group=group, host=host))]
     out: list[Condition] = []
     if safety in SAFETY_ALARMS:
         kind, sev, text = SAFETY_ALARMS[safety]
-        out.append(Condition(robot_alarm_id(group, kind), robot_text(group, text), sev, "robot"))
+        out.append(Condition(robot_alarm_id(group, kind), robot_text(group, text), sev, "robot",
+                             code=f"robot.safety.{safety.lower()}", params=kv(group=group)))
     elif safety not in QUIET_SAFETY:
         out.append(Condition(robot_alarm_id(group, "safety_mode"), robot_text(group, f"unexpected safety mode "
-                                                                                     f"{safety}"), WARNING, "robot"))
+                                                                                     f"{safety}"), WARNING, "robot",
+                             code="robot.safety_mode", params=kv(group=group, mode=safety)))
     if mode in ROBOT_MODE_ALARMS:
         kind, sev, text = ROBOT_MODE_ALARMS[mode]
-        out.append(Condition(robot_alarm_id(group, kind), robot_text(group, text), sev, "robot"))
+        out.append(Condition(robot_alarm_id(group, kind), robot_text(group, text), sev, "robot",
+                             code=f"robot.mode.{mode.lower()}", params=kv(group=group)))
     fault = str(field(state, "fault", "") or "")
     if fault:  # the controller ended a move itself (an aborted trajectory): active until the next command
-        out.append(Condition(robot_alarm_id(group, "motion_fault"), robot_text(group, fault), ERROR, "robot"))
+        out.append(Condition(robot_alarm_id(group, "motion_fault"), robot_text(group, fault), ERROR, "robot",
+                             code="robot.motion_fault", params=kv(group=group, fault=fault)))
     return RobotInfo(True, safety, mode), out
 
 
@@ -152,7 +162,8 @@ class ForceWatch:
             return [self.tripped] if self.tripped else []
         if self.tripped is None and norm > self.limit:
             self.tripped = Condition(self.alarm_id, f"wrist force {norm:.0f} N above the {self.limit:g} N limit "
-                                                    f"({self.topic})", ERROR, "force")
+                                                    f"({self.topic})", ERROR, "force", code="force.limit",
+                                     params=kv(force=f"{norm:.0f}", limit=f"{self.limit:g}", topic=self.topic))
         elif self.tripped is not None and norm < self.clear:
             self.tripped = None
         return [self.tripped] if self.tripped else []
@@ -178,7 +189,11 @@ def module_conditions(modules: Iterable[Any]) -> list[Condition]:
         missing = [n for n, up in zip(nodes, alive) if not up] if len(nodes) == len(alive) else []
         why = (f": {message}" if message else f": not running: {', '.join(missing)}" if missing
                else ": some of its nodes are not running")
-        out.append(Condition(f"module.{name}", f"module {name} is incomplete{why}", WARNING, "modules"))
+        code, params = (("module.incomplete_because", kv(module=name, message=message)) if message else
+                        ("module.nodes_down", kv(module=name, nodes=", ".join(missing))) if missing else
+                        ("module.incomplete", kv(module=name)))
+        out.append(Condition(f"module.{name}", f"module {name} is incomplete{why}", WARNING, "modules",
+                             code=code, params=params))
     return out
 
 
@@ -224,7 +239,11 @@ def diagnostic_conditions(statuses: Iterable[Any], rules: Sequence[Any], stale_s
             continue
         if s.level == D_STALE:
             text = f"{s.name}: no report for {stale_s:g} s (stale; last: {s.message or 'no message'})"
+            code, params = "diagnostics.stale", kv(name=s.name, seconds=f"{stale_s:g}", message=s.message)
         else:
             text = f"{s.name}: {s.message or ('warning' if s.level == D_WARN else 'error')}"
-        out.append(Condition(diagnostics_alarm_id(s.name), text, severity, "diagnostics"))
+            # The driver's message is its own words (not ours to translate): only an empty one gets a code.
+            code, params = ("", ()) if s.message else (
+                "diagnostics.warning" if s.level == D_WARN else "diagnostics.error", kv(name=s.name))
+        out.append(Condition(diagnostics_alarm_id(s.name), text, severity, "diagnostics", code=code, params=params))
     return out

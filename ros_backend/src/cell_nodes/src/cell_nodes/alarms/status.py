@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Optional, Sequence
 
 from .sources import STOP_STATUS, RobotInfo, robot_alarm_kind
 from .table import ERROR, WARNING, Alarm
@@ -21,6 +21,9 @@ class SafetyStatus:
     safety_mode: str
     robot_mode: str
     controller_connected: bool
+    code: str = ""                                   # the text's code and parameters (Alarm.msg)
+    params: tuple[tuple[str, str], ...] = ()
+    alarm_id: str = ""
 
 
 def overall(alarms: Sequence[Alarm], robot: RobotInfo) -> SafetyStatus:
@@ -32,6 +35,8 @@ def overall(alarms: Sequence[Alarm], robot: RobotInfo) -> SafetyStatus:
     status = next((STOP_STATUS[k] for k in STOP_STATUS if k in kinds), None)
     if status is None:
         status = "fault" if highest >= ERROR else "warning" if highest == WARNING else "normal"
-    text = active[0].text if active else "no active alarm"
+    first: Optional[Alarm] = active[0] if active else None
+    text = first.text if first else "no active alarm"
     return SafetyStatus(status, text, len(active), len(alarms) - len(active), highest, robot.safety_mode,
-                        robot.robot_mode, robot.connected)
+                        robot.robot_mode, robot.connected, first.code if first else "", first.params if first else (),
+                        first.id if first else "")

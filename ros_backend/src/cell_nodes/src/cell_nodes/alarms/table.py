@@ -20,6 +20,8 @@ class Condition:
     severity: int
     source: str
     since: Optional[float] = None  # when the source says it began (a device's own stamp); None: when we see it
+    code: str = ""                 # what the text says, for the app's catalogue (Alarm.msg); "": the text only
+    params: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass
@@ -32,6 +34,8 @@ class Alarm:
     first_seen: float   # when it entered the list (kept while it comes and goes, until a reset removes it)
     last_seen: float    # the last time its cause was detected
     count: int = 1      # how often it became active since it entered the list
+    code: str = ""
+    params: tuple[tuple[str, str], ...] = ()
 
 
 class AlarmTable:
@@ -61,15 +65,15 @@ class AlarmTable:
             a = self._alarms.get(c.id)
             if a is None:
                 first = min(c.since, now) if c.since is not None and c.since > 0 else now
-                self._alarms[c.id] = Alarm(c.id, c.text, c.severity, c.source, True, first, now)
+                self._alarms[c.id] = Alarm(c.id, c.text, c.severity, c.source, True, first, now, 1, c.code, c.params)
                 changed = True
                 continue
             if not a.active:
                 a.active = True
                 a.count += 1
                 changed = True
-            if (a.text, a.severity, a.source) != (c.text, c.severity, c.source):
-                a.text, a.severity, a.source = c.text, c.severity, c.source
+            if (a.text, a.severity, a.source, a.code, a.params) != (c.text, c.severity, c.source, c.code, c.params):
+                a.text, a.severity, a.source, a.code, a.params = c.text, c.severity, c.source, c.code, c.params
                 changed = True
             a.last_seen = max(a.last_seen, now)
         for a in self._alarms.values():
