@@ -51,6 +51,8 @@ test('login sets an HttpOnly SameSite=Strict cookie; me and config follow the ro
   const cfg = await (await get('/api/config', cookie)).json();
   assert.deepEqual(cfg.pages.map((p) => p.id), ['home', 'modules', 'process', 'manual', 'scene', 'sensors', 'video', 'alarms', 'recorder']);
   assert.equal(cfg.operation_mode.type, 'cell_msgs/OperationMode');
+  // The role's modules, with the cell file's title per language when it has one.
+  assert.deepEqual(cfg.features.modules.modules, [{ name: 'Diagnostics', title: { en: 'Diagnostics', es: 'Diagnóstico', fi: 'Diagnostiikka', de: 'Diagnose' }, roles: ['admin', 'operator'] }]);
 });
 
 test('without a session: me, config and system are 401', async () => {

@@ -18,6 +18,11 @@ describe('module views', () => {
     expect(v[1].nodes).toEqual([{ name: '/vision', alive: true }, { name: '/vision_monitor', alive: false }]);
     expect(v[1].state).toBe('incomplete');
   });
+  it('calls a module by the cell file\'s title (one per language, maybe), else by its name', () => {
+    const v = moduleViews([{ name: 'Vision', title: { en: 'Vision', fi: 'Konenäkö' } }, { name: 'Diagnostics' }], msg);
+    expect(v.map((x) => x.title)).toEqual([{ en: 'Vision', fi: 'Konenäkö' }, 'Diagnostics']);
+    expect(v.map((x) => x.name)).toEqual(['Vision', 'Diagnostics']);
+  });
   it('says unknown before the node reported a module, and for a state it does not know', () => {
     expect(moduleViews(visible, null).every((m) => m.state === 'unknown')).toBe(true);
     expect(moduleViews([{ name: 'Vision' }], { modules: [{ name: 'Vision', state: 'exploded' }] })[0].state).toBe('unknown');

@@ -1,4 +1,6 @@
 import { describe, it, expect } from 'vitest';
+import { setLocale } from '../../../src/lib/paraglide/runtime.js';
+import { cellText } from '../../../src/lib/core/i18n.js';
 import { paramDef, byCategory, validate, diff, problems, fieldErrors, loadDraft, storeDraft, draftKey } from '../../../src/lib/features/parameters/logic.js';
 
 const defs = [
@@ -68,5 +70,30 @@ describe('the local draft', () => {
     expect(m.has(draftKey('alice'))).toBe(false);
     m.set(draftKey('alice'), '{not json');
     expect(loadDraft(storage, 'alice')).toBeNull();
+  });
+});
+
+
+describe("the cell file's labels and categories per language", () => {
+  it('are shown by id, the node\'s English grouping the sections; a plain cell-file string leaves the node\'s', () => {
+    const texts = {
+      parts: { id: 'parts', label: { en: 'Parts per cycle', es: 'Piezas por ciclo' }, category: { en: 'Process', es: 'Proceso' } },
+      verify: { id: 'verify', label: 'Verify placement', category: { en: 'Process', es: 'Proceso' } },
+    };
+    const ds = [
+      paramDef({ id: 'parts', category: 'Process', label: 'Parts per cycle', type: 'int', has_max: true, max: 20, value: '3' }, texts),
+      paramDef({ id: 'verify', category: 'Process', label: 'Verify placement', type: 'bool', value: 'true' }, texts),
+      paramDef({ id: 'other', category: 'Motion', label: 'Other', type: 'int', value: '1' }, texts),
+    ];
+    const groups = byCategory(ds);
+    expect(groups.map((g) => [g.category, g.items.length])).toEqual([['Process', 2], ['Motion', 1]]);
+    setLocale('es', { reload: false });
+    try {
+      expect(groups.map((g) => cellText(g.title))).toEqual(['Proceso', 'Motion']);
+      expect(ds.map((d) => cellText(d.label))).toEqual(['Piezas por ciclo', 'Verify placement', 'Other']);
+      expect(validate(ds[0], '99')).toContain('Piezas por ciclo');
+    } finally {
+      setLocale('en', { reload: false });
+    }
   });
 });

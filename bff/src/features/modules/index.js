@@ -9,7 +9,7 @@ export default defineFeature({
   title: 'Modules',
   schema: featureSchema('modules'),
   // A role sees the modules it may launch (no `roles` on a module: every role that sees the page).
-  view: (section, role) => ({ modules: section.filter((m) => !m.roles || m.roles.includes(role)).map(({ name, roles }) => ({ name, roles })) }),
+  view: (section, role) => ({ modules: section.filter((m) => !m.roles || m.roles.includes(role)).map(({ name, title, roles }) => ({ name, ...(title ? { title } : {}), roles })) }),
   check: (section, cell) => section.flatMap((m, i) => (m.roles || []).flatMap((r, j) => (
     cell.roles[r] ? [] : [`modules[${i}].roles[${j}]: unknown role "${r}"`]))),
   reads: () => ({ subscribe: ['/cell/modules/state'], call_service: ['/cell/modules/output'] }),

@@ -150,6 +150,13 @@ def test_float_defaults_as_people_write_them() -> None:
     assert (d["approach_height"].default, d["speed_factor"].default, d["tolerance"].default) == ("50", "0.5", "1e-05")
 
 
+def test_a_label_or_category_per_language_is_known_to_the_node_by_its_english() -> None:
+    c = cell()
+    c["parameters"]["items"][0].update(label={"en": "Speed", "es": "Velocidad"}, category={"en": "Motion", "fi": "Liike"})
+    d = parse_parameters(c).items[0]
+    assert (d.label, d.category) == ("Speed", "Motion")
+
+
 @pytest.mark.parametrize("change, message", [
     (lambda c: c["parameters"]["items"].append(dict(ITEMS[0])), r"items\[8\]\.id: 'approach_height' is already the id of items\[0\]"),
     (lambda c: c["parameters"]["items"][0].update(default=250), r"items\[0\]\.default: Approach height: 250 mm is above the maximum 200 mm"),
@@ -169,6 +176,7 @@ def test_float_defaults_as_people_write_them() -> None:
     (lambda c: c["parameters"]["items"][0].update(id="Bad Id"), r"items\[0\]\.id: expected lower-case"),
     (lambda c: c["parameters"].update(csv="../escape.csv"), r"parameters\.csv: must be a file path inside DATA_DIR"),
     (lambda c: c["parameters"].update(csv="/etc/passwd"), r"parameters\.csv: must be a file path inside DATA_DIR"),
+    (lambda c: c["parameters"]["items"][0].update(label={"es": "Velocidad"}), r"items\[0\]\.label\.en: expected a non-empty"),
 ])
 def test_section_errors_name_the_field(change, message: str) -> None:
     c = cell()

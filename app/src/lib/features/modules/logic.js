@@ -32,6 +32,7 @@ export const STATE_VIEW = Object.freeze({
 /**
  * @typedef {object} ModuleView
  * @property {string} name
+ * @property {string | Record<string, string>} title  what the page calls it (the cell file's title, else the name)
  * @property {ModuleStateName} state
  * @property {{ name: string, alive: boolean }[]} nodes
  * @property {boolean} launchable  has launch files: Launch/Stop apply
@@ -47,7 +48,7 @@ function stateName(s) {
 /**
  * The modules the role sees (the cell file's list from /api/config, in its order), with their live state from the
  * node's message. A module the message does not mention is 'unknown' (the node has not reported it yet).
- * @param {{ name: string }[] | undefined} visible  /api/config features.modules.modules
+ * @param {{ name: string, title?: string | Record<string, string> }[] | undefined} visible  /api/config features.modules.modules
  * @param {any} msg  cell_msgs/ModuleStates, or null before the first message
  * @returns {ModuleView[]}
  */
@@ -55,11 +56,12 @@ export function moduleViews(visible, msg) {
   /** @type {Map<string, any>} */
   const byName = new Map();
   for (const x of Array.isArray(msg?.modules) ? msg.modules : []) if (x && typeof x.name === 'string') byName.set(x.name, x);
-  return (visible ?? []).map(({ name }) => {
+  return (visible ?? []).map(({ name, title }) => {
     const x = byName.get(name);
     const nodes = Array.isArray(x?.nodes) ? x.nodes.map((/** @type {string} */ n, /** @type {number} */ i) => ({ name: String(n), alive: !!x.alive?.[i] })) : [];
     return {
       name,
+      title: title ?? name,
       state: x ? stateName(x.state) : 'unknown',
       nodes,
       launchable: !!x?.launchable,

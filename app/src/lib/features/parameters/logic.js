@@ -18,8 +18,9 @@ export const NAMES = Object.freeze({
 /**
  * @typedef {object} ParamDef
  * @property {string} id
- * @property {string} category
- * @property {string} label
+ * @property {string} category  the node's (English): groups the page's sections
+ * @property {string | Record<string, string>} categoryTitle  the section's title (the cell file's, per language)
+ * @property {string | Record<string, string>} label  shown through cellText
  * @property {'int' | 'float' | 'bool' | 'string' | 'enum'} type
  * @property {string} unit
  * @property {number | null} min
@@ -35,14 +36,22 @@ export const NAMES = Object.freeze({
 const typeOf = (t) => (['int', 'float', 'bool', 'string', 'enum'].includes(t) ? t : 'string');
 
 /**
- * One definition from the node's answer (cell_msgs/Parameter).
- * @param {any} p @returns {ParamDef}
+ * One definition from the node's answer (cell_msgs/Parameter). The node knows a label and a category in English;
+ * the cell file's item of the same id may give them per language (shown through cellText).
+ * @param {any} p
+ * @param {Record<string, { label?: string | Record<string, string>, category?: string | Record<string, string> }>} [texts]
+ *   the cell file's parameters.items by id
+ * @returns {ParamDef}
  */
-export function paramDef(p) {
+export function paramDef(p, texts) {
+  const id = String(p?.id ?? '');
+  const own = texts && Object.hasOwn(texts, id) ? texts[id] : undefined;
+  const category = String(p?.category || m.parameters_category_general());
   return {
-    id: String(p?.id ?? ''),
-    category: String(p?.category || m.parameters_category_general()),
-    label: String(p?.label || p?.id || ''),
+    id,
+    category,
+    categoryTitle: (p?.category && typeof own?.category === 'object' && own.category) || category,
+    label: (typeof own?.label === 'object' && own.label) || String(p?.label || p?.id || ''),
     type: typeOf(p?.type),
     unit: String(p?.unit ?? ''),
     min: p?.has_min ? Number(p.min) : null,
@@ -63,7 +72,7 @@ export function byCategory(defs) {
     if (!m.has(d.category)) m.set(d.category, []);
     m.get(d.category)?.push(d);
   }
-  return [...m].map(([category, items]) => ({ category, items }));
+  return [...m].map(([category, items]) => ({ category, title: items[0].categoryTitle, items }));
 }
 
 // ---- numbers in the user's locale ----
@@ -161,7 +170,7 @@ export function canonical(d, text) {
 }
 
 /**
- * @typedef {{ id: string, label: string, unit: string, from: string, to: string }} Change
+ * @typedef {{ id: string, label: string | Record<string, string>, unit: string, from: string, to: string }} Change
  */
 
 /** Same value? Numbers by value (60.0 is 60), the rest as text. @param {ParamDef} d @param {string} a @param {string} b */

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping, Optional
 
+from ..cell_file import english
 from .values import TYPES, DEFAULT_MAX_LENGTH, InvalidValue, ParamDef, canonical
 
 _ID = re.compile(r"[a-z][a-z0-9_-]*")
@@ -49,7 +50,10 @@ def _number(value: Any, where: str) -> float:
 
 
 def _text(item: Mapping[str, Any], key: str, where: str, required: bool) -> str:
-    value = item.get(key)
+    """A label or category may be one per language: the node names the parameter by the English."""
+    value = english(item.get(key))
+    if isinstance(item.get(key), dict):
+        where, key = f"{where}.{key}", "en"
     if value is None and not required:
         return ""
     if not isinstance(value, str) or (required and not value.strip()):

@@ -24,6 +24,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional, Sequence, Union
 
+from cell_nodes.cell_file import english
 from cell_nodes.manual.config import UR_JOINTS, ur_joint_index
 
 DEFAULT_ACTION = "/cell/process/run"
@@ -182,9 +183,7 @@ def _name(value: Any, where: str) -> str:
 
 def _shown(value: Any, where: str) -> str:
     """A text the page shows: a string, or one per language ({en: ..., es: ...}); the node keeps the English."""
-    if isinstance(value, dict):
-        return _name(value.get("en"), f"{where}.en")
-    return _name(value, where)
+    return _name(english(value), f"{where}.en" if isinstance(value, dict) else where)
 
 
 def _text(raw: Mapping[str, Any], where: str, key: str = "text") -> str:
