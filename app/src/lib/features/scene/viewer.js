@@ -10,6 +10,7 @@ import { ColladaLoader } from 'three/examples/jsm/loaders/ColladaLoader.js';
 import { OBJLoader } from 'three/examples/jsm/loaders/OBJLoader.js';
 import URDFLoader from 'urdf-loader';
 import { presetPose } from './logic.js';
+import { themeColor, onThemeChange } from '../../core/theme-colors.js';
 import { m } from '$lib/paraglide/messages.js';
 
 const STALE_COLOR = new THREE.Color(0x8a8f98);
@@ -76,7 +77,6 @@ export class SceneViewer {
     this.renderer = new THREE.WebGLRenderer({ antialias: false, powerPreference: 'low-power' });
     // At most 1.5 device pixels per CSS pixel: sharp enough, and a phone's GPU (or a software renderer) keeps up.
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 1.5));
-    this.renderer.setClearColor(0xe9edf2);
     const canvas = this.renderer.domElement;
     canvas.setAttribute('role', 'img');
     canvas.setAttribute('aria-label', o.label ?? m.scene_title_cell());
@@ -85,7 +85,6 @@ export class SceneViewer {
     host.appendChild(canvas);
 
     this.scene = new THREE.Scene();
-    this.scene.background = new THREE.Color(0xe9edf2);
     this.camera = new THREE.PerspectiveCamera(FOV, 1, 0.01, 100);
     this.camera.up.set(0, 0, 1); // ROS: z up
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x667080, 2.2));
@@ -93,9 +92,13 @@ export class SceneViewer {
     sun.position.set(2, -1.5, 3);
     this.scene.add(sun);
     // The floor (the cell frame's xy plane, 0.1 m grid) and the cell frame's axes (x red, y green, z blue).
-    const grid = new THREE.GridHelper(4, 40, 0x9aa3ad, 0xc8ced6);
-    grid.rotation.x = Math.PI / 2;
-    this.scene.add(grid);
+    /** @type {THREE.GridHelper | null} */
+    this.grid = null;
+    this.applyTheme();
+    this.stopTheme = onThemeChange(() => {
+      this.applyTheme();
+      this.invalidate();
+    });
     this.scene.add(new THREE.AxesHelper(0.25));
     /** @type {Map<string, ArmEntry>} */
     this.arms = new Map();
@@ -448,7 +451,24 @@ export class SceneViewer {
     this.preset('front');
   }
 
+  /** The background and the floor grid in the drawn theme's colours (app.css --scene-*). */
+  applyTheme() {
+    const bg = new THREE.Color(themeColor('--scene-bg', '#e9edf2'));
+    this.renderer.setClearColor(bg);
+    this.scene.background = bg;
+    if (this.grid) {
+      this.scene.remove(this.grid);
+      this.grid.geometry.dispose();
+      /** @type {THREE.Material} */ (this.grid.material).dispose();
+    }
+    // The floor: the cell frame's xy plane, 0.1 m grid.
+    this.grid = new THREE.GridHelper(4, 40, new THREE.Color(themeColor('--scene-grid', '#9aa3ad')), new THREE.Color(themeColor('--scene-grid-2', '#c8ced6')));
+    this.grid.rotation.x = Math.PI / 2;
+    this.scene.add(this.grid);
+  }
+
   dispose() {
+    this.stopTheme();
     this.disposed = true;
     if (this.raf) cancelAnimationFrame(this.raf);
     if (this.wait) clearTimeout(this.wait);

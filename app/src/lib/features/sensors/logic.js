@@ -438,16 +438,19 @@ export class FrameScheduler {
   }
 }
 
-/** Line styles: colour AND dash, so series differ without colour too (legend shows both). */
+/**
+ * Line styles: colour AND dash, so series differ without colour too (legend shows both). The colour is the theme's
+ * (`token`, app.css; core/theme-colors.js), `color` the light theme's where the stylesheet is not there.
+ */
 export const SERIES_STYLES = Object.freeze([
-  { color: '#dc2626', dash: [] },
-  { color: '#16a34a', dash: [8, 4] },
-  { color: '#2563eb', dash: [2, 3] },
-  { color: '#d97706', dash: [10, 3, 2, 3] },
-  { color: '#7c3aed', dash: [4, 4] },
-  { color: '#0891b2', dash: [12, 2] },
-  { color: '#db2777', dash: [2, 6] },
-  { color: '#4b5563', dash: [6, 2, 2, 2] },
+  { token: '--chart-1', color: '#dc2626', dash: [] },
+  { token: '--chart-2', color: '#16a34a', dash: [8, 4] },
+  { token: '--chart-3', color: '#2563eb', dash: [2, 3] },
+  { token: '--chart-4', color: '#d97706', dash: [10, 3, 2, 3] },
+  { token: '--chart-5', color: '#7c3aed', dash: [4, 4] },
+  { token: '--chart-6', color: '#0891b2', dash: [12, 2] },
+  { token: '--chart-7', color: '#db2777', dash: [2, 6] },
+  { token: '--chart-8', color: '#4b5563', dash: [6, 2, 2, 2] },
 ]);
 
 /** @param {number} i */
