@@ -105,7 +105,9 @@ def test_a_fault_during_a_run_is_saved_as_one_mcap_file_with_what_led_to_it(cell
         assert js[0] <= at - BEFORE_S + 0.2 and js[-1] >= at + AFTER_S - 0.5, (js[0] - at, js[-1] - at)
         assert max(b - a for a, b in zip(js, js[1:])) < 0.25
         logs = [e.text for topic, _, msg in read if topic == "/cell/process/log" for e in msg.entries]
-        assert any("protective stop" in t for t in logs), logs[-5:]
+        # The run's end is in it, whichever stopped the run first: the move the protective stop refused, or the
+        # alarm mode the alarms node switched to (CI saw both orders).
+        assert any("protective stop" in t or "the cell went into alarm" in t for t in logs), logs[-5:]
         assert any(a.id == "device.protective_stop" and a.active for topic, _, msg in read if topic == "/cell/alarms/list"
                    for a in msg.alarms)
         states = [msg.state for topic, _, msg in read if topic == "/cell/process/state"]
