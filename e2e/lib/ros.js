@@ -39,13 +39,16 @@ export function publishMode(mode) {
 /** A device fault of the simulated cell (/sim/trigger_fault stands for a real device); 'reset' ends it. @param {string} f */
 export const simFault = (f) => rosCli(`rosservice call /sim/trigger_fault "fault: '${f}'"`);
 
-/** The cell as the next spec expects it: the gripper fault gone and its alarm reset (once inactive, Reset clears it). */
-export async function clearGripperFault() {
+/**
+ * The cell as the next spec expects it: the sim's faults gone and the alarm reset (once inactive, Reset clears it).
+ * @param {string} [alarmId] the alarm that must be gone from the list
+ */
+export async function clearSimFault(alarmId = 'device.gripper_fault') {
   await simFault('reset');
   await expect.poll(async () => {
     await rosCli('rosservice call /cell/alarms/reset');
-    return (await rosCli('rostopic echo -n1 /cell/alarms/list')).stdout.includes('device.gripper_fault');
-  }, { timeout: 30_000, message: 'the gripper alarm reset' }).toBe(false);
+    return (await rosCli('rostopic echo -n1 /cell/alarms/list')).stdout.includes(alarmId);
+  }, { timeout: 30_000, message: `the alarm ${alarmId} reset` }).toBe(false);
 }
 
 /**

@@ -7,7 +7,7 @@ import path from 'node:path';
 import { test, expect } from '@playwright/test';
 import AxeBuilder from '@axe-core/playwright';
 import { loginAs } from '../lib/app.js';
-import { simFault, clearGripperFault, recorderIdle } from '../lib/ros.js';
+import { simFault, clearSimFault, recorderIdle } from '../lib/ros.js';
 
 const PAGES = ['/', '/modules', '/process', '/manual', '/scene', '/sensors', '/video', '/parameters', '/routines', '/alarms', '/recorder', '/inspect', '/database', '/plant', '/system'];
 const THEMES = ['light', 'dark', 'contrast'];
@@ -79,7 +79,7 @@ test('with an active alarm (its banner, red badges, the Alarms page) every theme
     for (const url of ['/', '/alarms', '/process', '/manual', '/modules']) problems.push(...(await audit(page, url, 'alarm')));
     expect(problems).toEqual([]);
   } finally {
-    await clearGripperFault();
+    await clearSimFault();
     await recorderIdle();
   }
 });

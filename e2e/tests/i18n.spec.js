@@ -3,6 +3,7 @@
 // chosen in the user menu is kept with the account, so a new login on another device shows it.
 import { test, expect } from '@playwright/test';
 import { openMenu, users } from '../lib/app.js';
+import { simFault, clearSimFault, recorderIdle } from '../lib/ros.js';
 
 test.use({ locale: 'es-ES' });
 
@@ -49,6 +50,24 @@ test('a Spanish browser gets the app in Spanish: login, Process page, numbers an
   // A status field: its Spanish label from the cell file, its value with a decimal comma.
   const force = page.getByTestId('status-field').filter({ hasText: 'Fuerza de muñeca Z' });
   await expect(force.getByTestId('status-value')).toHaveText(/^-?\d+,\d+\s*N$/, { timeout: 20_000 });
+});
+
+test("a Spanish operator reads the cell's alarms in Spanish: a device's from the cell file, the robot's by its code", async ({ page }) => {
+  await signIn(page, 'operator', 'Iniciar sesión');
+  await page.goto('/alarms');
+  await simFault('door_open');
+  try {
+    // The sim's door writes its fault in English; the cell file's alarms.texts says it in Spanish.
+    const door = page.locator('[data-testid="alarm"][data-alarm="device.door_open"]');
+    await expect(door.locator('p.text')).toHaveText('Puerta de la célula abierta: parada de salvaguarda hasta que se cierre', { timeout: 20_000 });
+    // The alarms node's own alarm comes with its code and group: the app's Spanish catalogue says it.
+    const stop = page.locator('[data-testid="alarm"][data-alarm="robot.arm.safeguard_stop"]');
+    await expect(stop.locator('p.text')).toHaveText('Robot arm: parada de salvaguarda: un resguardo (puerta, cortina óptica) está abierto');
+    await expect(page.getByTestId('alarm-banner')).toContainText(/Puerta de la célula abierta|parada de salvaguarda: un resguardo/);
+  } finally {
+    await clearSimFault('device.door_open');
+    await recorderIdle();
+  }
 });
 
 test('a language chosen in the user menu is kept with the account: a new login elsewhere shows it', async ({ page, browser }) => {

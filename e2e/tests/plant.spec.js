@@ -5,7 +5,7 @@
 import { test, expect } from '@playwright/test';
 import WebSocket from 'ws';
 import { loginAs, goToPage } from '../lib/app.js';
-import { simFault as fault, clearGripperFault, recorderIdle } from '../lib/ros.js';
+import { simFault as fault, clearSimFault, recorderIdle } from '../lib/ros.js';
 import { otherCell } from '../lib/plant.js';
 
 /** @type {{base: string, stop: () => void}} */
@@ -13,7 +13,7 @@ let twin;
 test.beforeAll(async () => { twin = await otherCell('config/twin-arm-cell.yaml', /** @type {string} */ (process.env.E2E_PLANT_BROKER_URL)); });
 test.afterAll(() => twin?.stop());
 test.afterEach(async () => {
-  await clearGripperFault();
+  await clearSimFault();
   await recorderIdle();
 });
 
