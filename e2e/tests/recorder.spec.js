@@ -8,7 +8,7 @@ import { loginAs, goToPage } from '../lib/app.js';
 import { simFault as fault, clearSimFault } from '../lib/ros.js';
 import { MCAP_MAGIC, listed, newRecording } from '../lib/recorder.js';
 
-test.afterEach(clearSimFault);
+test.afterEach(() => clearSimFault());
 
 test('a fault is recorded: listed, its timeline shows the alarm, downloads as MCAP, an admin deletes it', async ({ page }) => {
   test.slow();
