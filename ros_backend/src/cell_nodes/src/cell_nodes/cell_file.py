@@ -19,8 +19,3 @@ def load_cell(path: str | None = None) -> dict[str, Any]:
         raise ValueError(f"{path}: not a cell file")
     return doc
 
-
-def english(value: Any) -> Any:
-    """A text the page shows may be one per language ({en: ..., es: ...}, the schema's $defs/text): a node keeps the
-    English. Anything else comes back as it is, for the caller to check."""
-    return value.get("en") if isinstance(value, dict) else value

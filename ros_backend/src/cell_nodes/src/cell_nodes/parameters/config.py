@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping, Optional
 
-from ..cell_file import english
+from ..texts import english
 from .values import TYPES, DEFAULT_MAX_LENGTH, InvalidValue, ParamDef, canonical
 
 _ID = re.compile(r"[a-z][a-z0-9_-]*")

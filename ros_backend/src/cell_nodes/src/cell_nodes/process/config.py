@@ -24,7 +24,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional, Sequence, Union
 
-from cell_nodes.cell_file import english
+from cell_nodes.texts import english
 from cell_nodes.manual.config import UR_JOINTS, ur_joint_index
 
 DEFAULT_ACTION = "/cell/process/run"
