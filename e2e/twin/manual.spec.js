@@ -5,7 +5,7 @@ import fs from 'node:fs';
 import yaml from 'js-yaml';
 import { test, expect } from '@playwright/test';
 import { loginAs } from '../lib/app.js';
-import { watchRobot } from '../lib/robot.js';
+import { watchRobot, expectStandstill } from '../lib/robot.js';
 
 const cell = /** @type {any} */ (yaml.load(fs.readFileSync(String(process.env.E2E_CELL_CONFIG), 'utf8')));
 const groups = cell.manual.groups.map((/** @type {any} */ g) => g.name);
@@ -42,9 +42,9 @@ test('each arm is chosen first, jogs while held and stops on release; the other 
     await page.mouse.down();
     await expect.poll(() => moved(before, arms[group].joints()), { timeout: 5_000 }).toBeGreaterThan(0.01);
     await page.mouse.up();
-    // Released: this arm stands still within a moment and stays still; the other one never moved.
-    await expect.poll(() => arms[group].speed(), { timeout: 3_000, intervals: [20] }).toBeLessThan(1e-3);
-    expect((await arms[group].observe(50)).travel).toBeLessThan(1e-4);
+    // Released: this arm comes to rest and stays at rest (CI once saw the arm still at the release, then moving: a
+    // stalled browser's backlog of heartbeats came with the release, see expectStandstill); the other one never moved.
+    await expectStandstill(arms[group]);
     expect(moved(otherBefore, arms[other].joints())).toBeLessThan(1e-3);
   }
   await page.getByRole('button', { name: 'Release control' }).click();
