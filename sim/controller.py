@@ -228,7 +228,14 @@ class Controller:
 
     def after_step(self) -> None:
         """Second half of a tick (lock held), after the physics step: the new state, the force guard."""
-        self.snapshot = self._make_snapshot(self.body.arm_state())
+        st = self.body.arm_state()
+        # The joints' speed as a real arm's encoders give it: the change of position over the step (in free motion
+        # the same as PyBullet's velocity state, to 1e-13). CI once saw 0.0105 rad/s reported, the same value
+        # across three tests, with the joints still (under 2 mrad in 0.4 s); a likely cause is a deep contact that
+        # PyBullet pushes apart by correcting positions, not velocities. A driver waiting for standstill then
+        # waits forever.
+        st.qd = (st.q - self.snapshot.actual_q) / DT
+        self.snapshot = self._make_snapshot(st)
         self._check_force_limit()
 
     def notify(self) -> None:

@@ -35,8 +35,16 @@ function groupOf(group) {
  * @typedef {object} RobotWatch
  * @property {() => number[]} joints  the latest actual joint positions (rad)
  * @property {() => number} speed  the largest absolute joint velocity in the latest message (rad/s)
- * @property {(n: number) => Promise<{maxSpeed: number, travel: number}>} observe  the next n messages
+ * @property {(n: number) => Promise<Observation>} observe  the next n messages
  * @property {() => void} close
+ */
+
+/**
+ * @typedef {object} Observation
+ * @property {number} maxSpeed  the largest absolute joint velocity over the messages (rad/s)
+ * @property {number} travel  the largest joint's distance from the first message to the last (rad)
+ * @property {string} detail  per joint: its position, travel and largest speed, and how long the messages took
+ *   (for a failure message: which joint moves, where, and whether it travels as fast as it reports)
  */
 
 /**
@@ -79,14 +87,18 @@ export async function watchRobot(group, url = process.env.E2E_ROSBRIDGE_URL || '
     speed: () => Math.max(...now().velocity.map(Math.abs)),
     observe: (n) => new Promise((resolve) => {
       const start = [...now().position];
-      let maxSpeed = 0;
+      const t0 = Date.now();
+      const peak = joints.map(() => 0);
       let seen = 0;
       /** @param {{position: number[], velocity: number[]}} m */
       const l = (m) => {
-        maxSpeed = Math.max(maxSpeed, ...m.velocity.map(Math.abs));
+        m.velocity.forEach((v, i) => { peak[i] = Math.max(peak[i], Math.abs(v)); });
         if (++seen < n) return;
         listeners = listeners.filter((x) => x !== l);
-        resolve({ maxSpeed, travel: Math.max(...m.position.map((q, i) => Math.abs(q - start[i]))) });
+        const moved = m.position.map((q, i) => Math.abs(q - start[i]));
+        const detail = `${n} messages in ${Date.now() - t0} ms; ` + joints.map((j, i) =>
+          `${j} at ${m.position[i].toFixed(4)}: travel ${moved[i].toExponential(2)}, speed up to ${peak[i].toExponential(3)}`).join('; ');
+        resolve({ maxSpeed: Math.max(...peak), travel: Math.max(...moved), detail });
       };
       listeners.push(l);
     }),
@@ -170,6 +182,19 @@ export async function expectStandstill(robot, timeout = 3_000) {
   const end = Date.now() + timeout;
   let after = await robot.observe(STILL.messages);
   while (!(after.travel < STILL.rad && after.maxSpeed < STILL.speed) && Date.now() < end) after = await robot.observe(STILL.messages);
-  expect(after.travel, `travel over the last ${STILL.messages} joint states, ${timeout} ms after the release (their largest speed: ${after.maxSpeed} rad/s)`).toBeLessThan(STILL.rad);
-  expect(after.maxSpeed, `the largest joint speed over those ${STILL.messages} joint states`).toBeLessThan(STILL.speed);
+  expect(after.travel, `travel over the last ${STILL.messages} joint states, ${timeout} ms after the release (${after.detail})`).toBeLessThan(STILL.rad);
+  expect(after.maxSpeed, `the largest joint speed over those ${STILL.messages} joint states (${after.detail})`).toBeLessThan(STILL.speed);
+}
+
+/**
+ * Wait for the arm to be at rest: every joint below `speed` over `messages` joint states in a row (within
+ * `timeout`). A failure names each joint's position, travel and speed.
+ * @param {RobotWatch} robot
+ * @param {{ speed?: number, messages?: number, timeout?: number }} [opts]
+ */
+export async function expectAtRest(robot, { speed = 1e-3, messages = 25, timeout = 10_000 } = {}) {
+  const end = Date.now() + timeout;
+  let o = await robot.observe(messages);
+  while (o.maxSpeed >= speed && Date.now() < end) o = await robot.observe(messages);
+  expect(o.maxSpeed, `the largest joint speed over ${messages} joint states, after ${timeout} ms (${o.detail})`).toBeLessThan(speed);
 }

@@ -4,7 +4,7 @@
 // watching the current operation and the log.
 import { test, expect } from '@playwright/test';
 import { loginAs, sessionCookie, rosSocket } from '../lib/app.js';
-import { watchRobot } from '../lib/robot.js';
+import { watchRobot, expectAtRest } from '../lib/robot.js';
 
 /** @type {import('../lib/robot.js').RobotWatch} */
 let robot;
@@ -17,7 +17,7 @@ test.afterAll(() => robot?.close());
 // Start, as an operator would find it).
 const NOT_RUNNING = /^(Idle|Error)$/;
 
-const standstill = () => expect.poll(async () => (await robot.observe(25)).maxSpeed, { timeout: 10_000 }).toBeLessThan(1e-3);
+const standstill = () => expectAtRest(robot);
 
 /** @param {import('@playwright/test').Page} page */
 async function clickStart(page) {

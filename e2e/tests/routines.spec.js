@@ -4,7 +4,7 @@
 // deletes it.
 import { test, expect } from '@playwright/test';
 import { loginAs, openMenu } from '../lib/app.js';
-import { watchTcp, watchRobot } from '../lib/robot.js';
+import { watchTcp, watchRobot, expectAtRest } from '../lib/robot.js';
 
 /** @type {import('../lib/robot.js').TcpWatch} */
 let tcp;
@@ -28,7 +28,7 @@ async function go(page, title) {
 
 /** @param {import('@playwright/test').Page} page */
 async function standstill(page) {
-  await expect.poll(async () => (await robot.observe(25)).maxSpeed, { timeout: 10_000 }).toBeLessThan(1e-3);
+  await expectAtRest(robot);
   void page;
 }
 
