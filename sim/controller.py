@@ -36,6 +36,7 @@ PROTECTIVE_STOP_DECEL = 8.0                   # rad/s^2 (category 2 stop)
 FORCE_LIMIT = 150.0                           # N at the wrist before the cell's force guard trips
 FORCE_LIMIT_TICKS = 25                        # ... sustained for 50 ms
 GRIPPER_DO = 0                                # the demo's gripper closes on standard digital output 0
+QD_WINDOW = 10                                # ticks (20 ms) over which the reported joint speeds are taken
 INTEGRAL_GAIN = 0.05                          # why: removes the steady sag of position control under gravity
 
 
@@ -191,6 +192,7 @@ class Controller:
         self._over_force_ticks = 0
         self._q_before_overload = self.body.arm_state().q
         self._q_history: deque[np.ndarray] = deque(maxlen=50)
+        self._q_window: deque[np.ndarray] = deque([self._q_before_overload], maxlen=QD_WINDOW + 1)
         self.tick_listeners: list[Callable[[Snapshot], None]] = []
         self.snapshot = self._make_snapshot()
         self.ticks = 0
@@ -229,12 +231,13 @@ class Controller:
     def after_step(self) -> None:
         """Second half of a tick (lock held), after the physics step: the new state, the force guard."""
         st = self.body.arm_state()
-        # The joints' speed as a real arm's encoders give it: the change of position over the step (in free motion
-        # the same as PyBullet's velocity state, to 1e-13). CI once saw 0.0105 rad/s reported, the same value
-        # across three tests, with the joints still (under 2 mrad in 0.4 s); a likely cause is a deep contact that
-        # PyBullet pushes apart by correcting positions, not velocities. A driver waiting for standstill then
-        # waits forever.
-        st.qd = (st.q - self.snapshot.actual_q) / DT
+        # The joints' speed as a controller estimates it from its encoders: the change of position over the last
+        # QD_WINDOW ticks. PyBullet's own velocity state is not that: CI saw 0.0105 rad/s reported, the same value
+        # across three tests, with the joints still (under 2 mrad in 0.4 s). A one-step difference is not either:
+        # CI then saw a wrist at rest flicker by 1e-5 rad from step to step, 0.013 rad/s. Either kept the driver
+        # from ever seeing a standstill. A constant speed reads exactly (a ramp 10 ms late).
+        self._q_window.append(st.q)
+        st.qd = (st.q - self._q_window[0]) / (DT * max(len(self._q_window) - 1, 1))
         self.snapshot = self._make_snapshot(st)
         self._check_force_limit()
 
