@@ -1,6 +1,7 @@
 // The operator's language, through the real page and BFF: a browser that asks for Spanish gets the login form and
 // the Process page in Spanish, with Spanish number formats and the cell file's Spanish operation titles; a language
-// chosen in the user menu is kept with the account, so a new login on another device shows it.
+// chosen in the user menu is kept with the account, so a new login on another device shows it; the process log is
+// said in Spanish too.
 import { test, expect } from '@playwright/test';
 import { openMenu, users } from '../lib/app.js';
 import { simFault, clearSimFault, recorderIdle } from '../lib/ros.js';
@@ -50,6 +51,20 @@ test('a Spanish browser gets the app in Spanish: login, Process page, numbers an
   // A status field: its Spanish label from the cell file, its value with a decimal comma.
   const force = page.getByTestId('status-field').filter({ hasText: 'Fuerza de muñeca Z' });
   await expect(force.getByTestId('status-value')).toHaveText(/^-?\d+,\d+\s*N$/, { timeout: 20_000 });
+
+  // The process node's log in Spanish: its lines come with a code and parameters, not only the English sentence
+  // (here: the dry run switched on and off).
+  await page.getByRole('button', { name: 'Tomar el control' }).click();
+  const dry = page.getByRole('switch', { name: /Ejecución en vacío/ });
+  await dry.click();
+  await expect(dry).toBeChecked();
+  await expect(dry).toBeEnabled();
+  await dry.click();
+  await expect(dry).not.toBeChecked();
+  const lines = page.getByTestId('process-log').getByRole('listitem');
+  await expect(lines.first()).toContainText('Ejecución en vacío desactivada: el proceso mueve el robot');
+  await expect(lines.nth(1)).toContainText('Ejecución en vacío activada: el proceso recorre sus pasos sin mover el robot');
+  await page.getByRole('button', { name: 'Liberar el control' }).click();
 });
 
 test("a Spanish operator reads the cell's alarms in Spanish: a device's from the cell file, the robot's by its code", async ({ page }) => {

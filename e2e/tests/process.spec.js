@@ -72,7 +72,8 @@ test('an operator starts the process, pauses, resumes, stops and runs one operat
   await expect(log.getByRole('listitem').first()).toContainText(/stop/i);
   await page.getByRole('radio', { name: /Return home/ }).check();
   await page.getByRole('button', { name: 'Run step' }).click();
-  await expect(log.getByRole('listitem').first()).toContainText("Done: operation 'return home' done", { timeout: 60_000 });
+  // (The log names the operation by its title in the cell file.)
+  await expect(log.getByRole('listitem').first()).toContainText("Done: operation 'Return home' done", { timeout: 60_000 });
   await expect(state).toHaveText('Idle', { timeout: 10_000 });
   await page.getByRole('button', { name: 'Release control' }).click();
 });

@@ -5,6 +5,7 @@
 
 import { m } from '$lib/paraglide/messages.js';
 import { fmtDateTime } from '../core/i18n.js';
+import { paramsOf, saidText } from '../core/said.js';
 
 /** @typedef {'info' | 'warning' | 'error'} LogLevel */
 /** @typedef {{ key: string, at: number | null, level: LogLevel, label: string, text: string }} LogLine */
@@ -36,16 +37,19 @@ export function levelOf(l) {
 /**
  * @param {any} msg  cell_msgs/LogEntries, or null
  * @param {number} [max]
+ * @param {import('../core/said.js').Rename} [rename]  how the page names a parameter's value (an operation's title)
  * @returns {LogLine[]}
  */
-export function logLines(msg, max = 200) {
+export function logLines(msg, max = 200, rename) {
   const entries = Array.isArray(msg?.entries) ? msg.entries : [];
   const out = [];
   for (let i = entries.length - 1; i >= 0 && out.length < max; i--) {
     const e = entries[i];
     const level = levelOf(e?.level);
     const at = rosTimeMs(e?.stamp);
-    out.push({ key: `${i}:${at ?? ''}`, at, level, label: levelLabel(level), text: String(e?.text ?? '') });
+    const text = String(e?.text ?? '');
+    const said = typeof e?.code === 'string' && e.code ? saidText(e.code, paramsOf(e.params), text, rename) : text;
+    out.push({ key: `${i}:${at ?? ''}`, at, level, label: levelLabel(level), text: said });
   }
   return out;
 }

@@ -19,7 +19,8 @@ from cell_nodes.process.conditions import ConditionError, field_value, holds
 from cell_nodes.process.config import ConfigError, MovePose, Tool, parse_cell_process, parse_process
 from cell_nodes.process.executor import (ERROR, IDLE, PAUSED, PAUSING, RUNNING, STOPPING, Executor, Progress,
                                          RunRequest, RunResult)
-from cell_nodes.process.mode import ModeFollower
+from cell_nodes.process.mode import ModeFollower, alarm_reason
+from cell_nodes.said import Said, coded, say
 from cell_nodes.process.steps import describe, resolve_pose, table_index
 
 from conftest import wait_for
@@ -184,6 +185,53 @@ class FakeTopics:
             cb(msg)
 
 
+# ------------------------------------------------------------------------------------------- said texts
+APP_MESSAGES = Path(__file__).resolve().parents[4] / "app" / "messages"
+LANGS = ("en", "es", "fi", "de")
+_catalogues: dict[tuple[str, str], dict[str, Any]] = {}
+
+
+def _catalogue(feature: str, lang: str) -> dict[str, Any]:
+    if (feature, lang) not in _catalogues:
+        _catalogues[feature, lang] = json.loads((APP_MESSAGES / feature / f"{lang}.json").read_text())
+    return _catalogues[feature, lang]
+
+
+def _templates(entry: Any, count: Optional[str]) -> tuple[list[str], str]:
+    """A catalogue entry's texts (every plural form) and the one English uses for this count."""
+    if isinstance(entry, str):
+        return [entry], entry
+    forms = entry[0]["match"]
+    return list(forms.values()), forms["countPlural=one" if count == "1" else "countPlural=other"]
+
+
+def check_said(text: str) -> None:
+    """A text a node says with a code: its key is in every language's catalogue (app/src/lib/core/said.js), with the
+    same parameters; the English catalogue text is the node's English; nested parameters alike."""
+    code, params = coded(text)
+    if not code:
+        return
+    flat = dict(params)
+    top = {k: v for k, v in params if "." not in k}
+    if code.startswith("alarm."):   # an alarm's code: the alarms feature's catalogue (test_alarms_logic.py)
+        for lang in LANGS:
+            assert "alarms_code_" + code[6:].replace(".", "_") in _catalogue("alarms", lang), (lang, code)
+        return
+    feature, rest = code.split(".", 1)
+    key = f"{feature}_said_{rest.replace('.', '_')}"
+    for lang in LANGS:
+        cat = _catalogue(feature, lang)
+        assert key in cat, f"{lang}: no {key} for {text!r}"
+        forms, _ = _templates(cat[key], top.get("count"))
+        for form in forms:
+            assert set(re.findall(r"\{(\w+)\}", form)) == set(top), (lang, key, form, top)
+    assert _templates(_catalogue(feature, "en")[key], top.get("count"))[1].format(**top) == str(text), (key, text)
+    for k, v in top.items():
+        if f"{k}.code" in flat:
+            check_said(Said(v, flat[f"{k}.code"], [(kk[len(k) + 1:], vv) for kk, vv in params
+                                                    if kk.startswith(f"{k}.") and kk != f"{k}.code"]))
+
+
 class Harness:
     def __init__(self, cfg=None, step_s: float = 1.0) -> None:
         self.clock = FakeClock()
@@ -192,9 +240,13 @@ class Harness:
         self.progress: list[Progress] = []
         self.log: list[tuple[str, str]] = []
         self.ex = Executor(cfg or config(), self.robot, self.clock, self.topics, self.progress.append,
-                           lambda level, text: self.log.append((level, text)))
+                           self._on_log)
         self.result: Optional[RunResult] = None
         self.thread: Optional[threading.Thread] = None
+
+    def _on_log(self, level: str, text: str) -> None:
+        check_said(text)     # every line of every run here: its code and the app's catalogue agree
+        self.log.append((level, text))
 
     def start(self, req: RunRequest) -> None:
         assert self.ex.begin(req) is None
@@ -322,6 +374,17 @@ def test_step_texts() -> None:
                      "Move to pose (x -0.45, y -0.25, z 0.1)", "Move relative z +0.1 m",
                      "Move relative x +0.05 m, rz +0.3 rad (tool)", "Wait for /x data = true",
                      "Wait for /f wrench.force.z < -3.5", "Run routine pick2", "Into pocket 2", "Settle"]
+    # Each says what it is with a code and parameters (the app's catalogue, process_said_<code>); the cell file's
+    # own texts have none.
+    assert [coded(t)[0] for t in texts] == [
+        "process.step_move_named", "process.step_tool", "process.step_wait", "process.step_move_table",
+        "process.step_move_pose", "process.step_move_relative", "process.step_move_relative_tool",
+        "process.step_wait_topic", "process.step_wait_topic", "process.step_routine", "", ""]
+    assert coded(texts[3])[1] == [("table", "part"), ("n", "2"), ("note", " (approach)"),
+                                  ("note.code", "process.step_note"), ("note.note", "approach")]
+    assert coded(texts[1])[1] == [("tool", "Gripper"), ("action", "close")]
+    for t in texts:
+        check_said(t)
 
 
 def test_pose_tables_index_by_cycle_and_wrap() -> None:
@@ -1004,3 +1067,71 @@ def test_texts_per_language_are_the_pages_the_node_keeps_the_english():
     assert cfg.status_fields[0].label == "Cycles done"
     with pytest.raises(ConfigError, match=r"status_fields\[0\]\.label\.en"):
         parse_process(_with(status_fields=[{"label": {"es": "Ciclos"}, "topic": "/t", "field": "f"}]), MANUAL)
+
+
+def test_said_texts_nest_their_codes_and_stay_strings() -> None:
+    inner = say("process.count_cycle", "3 cycles", count=3)
+    outer = say("process.done_cycles", "{cycles} done", cycles=inner)
+    assert outer == "3 cycles done" and isinstance(outer, str)
+    assert coded(outer) == ("process.done_cycles", [("cycles", "3 cycles"), ("cycles.code", "process.count_cycle"),
+                                                    ("cycles.count", "3")])
+    assert coded("plain") == ("", [])
+    assert coded(outer + "!") == ("", []), "a text made from it is plain English"
+
+
+def test_the_run_log_lines_carry_codes() -> None:
+    h = Harness()
+    h.start(RunRequest(-1, 1))
+    h.join()
+    lines = [t for _, t in h.log]
+    assert coded(lines[0]) == ("process.start_cycles", [
+        ("cycles", "1 cycle"), ("cycles.code", "process.count_cycle"), ("cycles.count", "1"),
+        ("operations", "3 operations"), ("operations.code", "process.count_operation"), ("operations.count", "3"),
+        ("cycle", "1"), ("dry", "")])
+    assert lines[0] == "Start: 1 cycle of 3 operations from cycle 1"
+    assert coded(lines[1])[0] == "process.operation" and coded(lines[2])[0] == "process.step_move_named"
+    done = lines[-1]
+    assert done == "Done: 1 cycle done" and coded(done)[0] == "process.done"
+    assert ("result.code", "process.done_cycles") in coded(done)[1]
+
+
+class _Status:
+    def __init__(self, active: int, alarm_id: str = "", text: str = "", code: str = "", params=()) -> None:
+        self.active_count, self.alarm_id, self.text, self.code = active, alarm_id, text, code
+        self.params = [type("KV", (), {"key": k, "value": v})() for k, v in params]
+
+
+def test_a_run_ended_by_the_alarm_mode_names_the_alarm() -> None:
+    named = alarm_reason("alarms", _Status(1, "robot.arm.protective_stop", "Robot arm: protective stop",
+                                           "robot.safety.protective_stop", [("group", "arm")]))
+    assert named == ("the cell went into alarm (alarms): robot.arm.protective_stop: Robot arm: protective stop; "
+                     "the run was stopped")
+    code, params = coded(named)
+    assert code == "process.reason_alarm_named"
+    assert ("alarm.code", "alarm.robot.safety.protective_stop") in params and ("alarm.group", "arm") in params
+    # No status yet, or no active alarm in it: the source only.
+    for status in (None, _Status(0)):
+        plain = alarm_reason("", status)
+        assert plain == "the cell went into alarm (unknown): the run was stopped"
+        assert coded(plain)[0] == "process.reason_alarm"
+        check_said(plain)
+    check_said(named)
+
+
+def test_the_clients_own_log_lines_carry_codes() -> None:
+    c, _ = client()
+    c.on_mode("alarm")
+    c.start(1)
+    c.on_mode("idle")
+    c.ready = False
+    c.step_request(0)
+    c.ready = True
+    c.set_dry_run(True)
+    c.start(1)
+    c.set_dry_run(False)
+    c.on_lost("the process server stopped answering during the run")
+    lines = [e.text for e in c.log.entries()]
+    assert [coded(t)[0] for t in lines] == ["process.start_refused", "process.step_refused", "process.dry_on",
+                                            "process.dry_change_refused", "process.error"]
+    for t in lines:
+        check_said(t)

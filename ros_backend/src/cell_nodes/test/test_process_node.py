@@ -310,6 +310,13 @@ def test_pause_holds_between_steps_and_resume_goes_on_with_the_next(env: dict) -
     texts = ui.texts()
     assert f"Paused after 'Gripper open'; next: 'Move to {part} (approach)'" in texts
     assert f"Resumed: next 'Move to {part} (approach)'" in texts
+    # Lines from the server (paused, resumed) and the state's step and message keep their codes and parameters
+    # over both hops (server -> client node -> page).
+    entries = {e.text: e for e in ui.log.msg.entries}
+    paused = entries[f"Paused after 'Gripper open'; next: 'Move to {part} (approach)'"]
+    assert paused.code == "process.paused_after"
+    assert {(kv.key, kv.value) for kv in paused.params} >= {("after", "Gripper open"), ("after.code", "process.step_tool"),
+                                                           ("next.code", "process.step_move_table"), ("next.table", "part")}
     assert ui.resume().message == "the process is not running"
 
 
@@ -329,6 +336,7 @@ def test_stop_mid_step_and_a_failing_step(env: dict) -> None:
     assert s.current == -1 and s.cycle == cycle         # the cycle was interrupted: it is run again next
     ui.wait_mode("idle")
     assert f"Stopped during 'Move to {part} (approach)': stopped by the operator" in ui.texts()
+    assert (s.message, s.message_code) == ("stopped by the operator", "process.reason_operator")
 
     driver.reset()
     driver.fail["move_pose"] = "pose unreachable: no inverse kinematics solution"
@@ -336,6 +344,7 @@ def test_stop_mid_step_and_a_failing_step(env: dict) -> None:
     s = ui.wait_state("error", 5)
     message = f"Move to {part} (approach) failed: pose unreachable: no inverse kinematics solution"
     assert (s.message, s.current, s.step_index, s.step) == (message, 0, 2, f"Move to {part} (approach)")
+    assert (s.message_code, s.step_code) == ("process.step_failed", "process.step_move_table")
     assert driver.stops == 1 and driver.kinds() == ["move_named", "tool", "move_pose"]
     wait_for(lambda: f"Error: {message}" in ui.texts(), 3, what="the error in the log")
     ui.wait_mode("idle")

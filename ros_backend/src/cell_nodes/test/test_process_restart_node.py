@@ -133,6 +133,8 @@ def test_cycle_times_with_and_without_pauses_and_the_counter_survives_a_power_cu
     assert (s.last_cycle_s, s.last_cycle_elapsed_s) == before
     wait_for(lambda: "Restored after a restart: the next cycle is 2" in " ".join(_texts(cell["log"])), 3,
              what="the restore in the page's log")
+    restored = next(e for e in cell["log"].msg.entries if e.text.startswith("Restored after a restart"))
+    assert restored.code == "process.restored" and ("cycle", "2") in [(kv.key, kv.value) for kv in restored.params]
     assert rospy.ServiceProxy("/cell/process/set_dry_run", SetBool)(True).success
     r = rospy.ServiceProxy("/cell/process/start", ProcessStart)(cycles=1)
     assert (r.success, r.message) == (True, "started: 1 cycle from cycle 2 (dry run)")

@@ -4,7 +4,8 @@
  */
 
 import { m } from '$lib/paraglide/messages.js';
-import { getLocale, cellText, fmtNumber } from '../../core/i18n.js';
+import { getLocale, cellText } from '../../core/i18n.js';
+import { paramsOf, saidText } from '../../core/said.js';
 
 export const FEATURE_ID = 'alarms';
 
@@ -84,20 +85,6 @@ export function alarmViews(msg) {
 }
 
 /**
- * diagnostic_msgs/KeyValue[] (an alarm's parameters) as an object; anything else: none.
- * @param {unknown} list @returns {Record<string, string>}
- */
-export function paramsOf(list) {
-  /** @type {Record<string, string>} */
-  const out = {};
-  if (Array.isArray(list)) for (const kv of list) if (kv && typeof kv.key === 'string') out[kv.key] = String(kv.value ?? '');
-  return out;
-}
-
-/** The catalogue's functions by key, for the alarm codes (alarms_code_<code with . as _>). */
-const catalogue = /** @type {Record<string, ((p: Record<string, string>) => string) | undefined>} */ (/** @type {unknown} */ (m));
-
-/**
  * An alarm's words in the user's language: the cell file's text for its id (alarms.texts), else the app's
  * catalogue text of its code with its parameters (a plain number in the user's format), else the robot PC's own
  * text (English, or a device's words).
@@ -108,14 +95,7 @@ const catalogue = /** @type {Record<string, ((p: Record<string, string>) => stri
 export function alarmText(a, texts) {
   const own = a.id && texts && Object.hasOwn(texts, a.id) ? texts[a.id] : undefined;
   if (own) return cellText(own);
-  const say = a.code ? catalogue[`alarms_code_${a.code.replaceAll('.', '_')}`] : undefined;
-  if (typeof say === 'function') {
-    /** @type {Record<string, string>} */
-    const p = {};
-    for (const [k, v] of Object.entries(a.params ?? {})) p[k] = /^-?\d+(\.\d+)?$/.test(v) ? fmtNumber(Number(v)) : v;
-    return say(p);
-  }
-  return cellText(a.text);
+  return a.code ? saidText(`alarm.${a.code}`, a.params ?? {}, cellText(a.text)) : cellText(a.text);
 }
 
 /**

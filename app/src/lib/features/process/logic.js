@@ -4,6 +4,7 @@
  * in the user's locale.
  */
 import { m } from '$lib/paraglide/messages.js';
+import { paramsOf, saidText } from '../../core/said.js';
 import { fmtNumber, fmtFixed, cellText } from '$lib/core/i18n.js';
 
 export const FEATURE_ID = 'process';
@@ -70,15 +71,16 @@ const num = (v, d = 0) => (Number.isFinite(Number(v)) ? Number(v) : d);
 /**
  * @param {any} msg  cell_msgs/ProcessState or null
  * @param {string[]} [fallbackOperations]  the cell file's names (before the first message)
+ * @param {import('../../core/said.js').Rename} [rename]  how the page names a parameter (an operation's title)
  * @returns {ProcessView}
  */
-export function processView(msg, fallbackOperations = []) {
+export function processView(msg, fallbackOperations = [], rename) {
   const ops = Array.isArray(msg?.operations) && msg.operations.length ? msg.operations.map(String) : [...fallbackOperations];
   return {
     state: msg ? stateName(msg.state) : 'unknown',
     operations: ops,
     current: msg ? num(msg.current, -1) : -1,
-    step: String(msg?.step ?? ''),
+    step: said(msg?.step, msg?.step_code, msg?.step_params, rename),
     stepIndex: num(msg?.step_index),
     stepCount: num(msg?.step_count),
     dryRun: !!msg?.dry_run,
@@ -92,8 +94,26 @@ export function processView(msg, fallbackOperations = []) {
     lastCycleElapsedS: num(msg?.last_cycle_elapsed_s),
     atStart: !!msg?.at_start,
     startConfiguration: String(msg?.start_configuration ?? ''),
-    message: String(msg?.message ?? ''),
+    message: said(msg?.message, msg?.message_code, msg?.message_params, rename),
   };
+}
+
+/**
+ * A text of the node's state in the user's language (its code and parameters), else its English.
+ * @param {unknown} text @param {unknown} code @param {unknown} params @param {import('../../core/said.js').Rename} [rename]
+ */
+function said(text, code, params, rename) {
+  const t = String(text ?? '');
+  return typeof code === 'string' && code ? saidText(code, paramsOf(params), t, rename) : t;
+}
+
+/**
+ * How the process's texts name a parameter: an operation by its title in the cell file (user's language).
+ * @param {Record<string, unknown>} titles  title by name
+ * @returns {import('../../core/said.js').Rename}
+ */
+export function processNames(titles) {
+  return (key, value) => (key === 'operation' ? operationText(value, titles) : undefined);
 }
 
 /** @param {ProcessStateName} s */

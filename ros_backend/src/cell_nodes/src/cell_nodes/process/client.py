@@ -20,6 +20,7 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping, Optional, Sequence
 
+from ..said import say
 from ..state_file import finite_number
 from .config import ProcessConfig
 from .executor import ACTIVE_STATES, ERROR, IDLE, PAUSED, RUNNING, STOPPING, Progress, RunRequest, RunResult
@@ -147,21 +148,22 @@ class ProcessClient:
     # ------------------------------------------------------------------------------------------- commands
     def _refusal(self) -> Optional[str]:
         if self.config is None:
-            return f"the process cannot run: {self.config_error}"
+            return say("process.reason_config", "the process cannot run: {error}", error=self.config_error)
         if self.active:
-            return ("the process is paused: resume or stop it" if self.state == PAUSED
-                    else "the process is already running: stop it first")
+            return (say("process.reason_paused", "the process is paused: resume or stop it") if self.state == PAUSED
+                    else say("process.reason_running", "the process is already running: stop it first"))
         if self.mode == self.alarm_mode:
-            return "the cell is in alarm: reset it first"
+            return say("process.reason_alarm_mode", "the cell is in alarm: reset it first")
         if not self.ready:
-            return "the process server is not running (its action server does not answer)"
+            return say("process.reason_no_server",
+                       "the process server is not running (its action server does not answer)")
         return None
 
     def start(self, cycles: int) -> tuple[Optional[RunRequest], str]:
         """Start: the request to send, or None and why not."""
         why = self._refusal()
         if why is not None:
-            self.note("warning", f"Start refused: {why}")
+            self.note("warning", say("process.start_refused", "Start refused: {reason}", reason=why))
             return None, why
         return self._begin(RunRequest(-1, int(cycles), self.dry_run, self.next_cycle), "cycle")
 
@@ -171,7 +173,7 @@ class ProcessClient:
             names = ", ".join(f"{i} {n}" for i, n in enumerate(self.operations))
             why = f"no operation {index} (the process has {len(self.operations)}: {names})"
         if why is not None:
-            self.note("warning", f"Step refused: {why}")
+            self.note("warning", say("process.step_refused", "Step refused: {reason}", reason=why))
             return None, why
         return self._begin(RunRequest(index, 1, self.dry_run, self.next_cycle), "step")
 
@@ -188,15 +190,15 @@ class ProcessClient:
 
     def set_dry_run(self, on: bool) -> tuple[bool, str]:
         if self.active:
-            why = "the process is running: change the dry run once it is stopped"
-            self.note("warning", f"Dry run change refused: {why}")
+            why = say("process.reason_running_dry", "the process is running: change the dry run once it is stopped")
+            self.note("warning", say("process.dry_change_refused", "Dry run change refused: {reason}", reason=why))
             return False, why
         if on == self.dry_run:
             return True, f"dry run is already {'on' if on else 'off'}"
         self.dry_run = on
         text = ("dry run on: the process walks its steps without moving the robot" if on
                 else "dry run off: the process moves the robot")
-        self.note("info", text[:1].upper() + text[1:])
+        self.note("info", say(f"process.dry_{'on' if on else 'off'}", text[:1].upper() + text[1:]))
         return True, text
 
     def stop_request(self) -> tuple[bool, str]:
@@ -266,7 +268,7 @@ class ProcessClient:
             return
         self.on_result(RunResult(False, why, ERROR, False, self.cycles_done, self.last_cycle_s, self.current,
                                  self.step_index, self.step, self.last_cycle_elapsed_s))
-        self.note("error", f"Error: {why}")
+        self.note("error", say("process.error", "Error: {reason}", reason=why))
 
     # ------------------------------------------------------------------------------------------- output
     def view(self) -> StateView:

@@ -15,6 +15,8 @@ Rules:
 - Dry run: every step is logged and shown for `dry_run_step_s`, without any robot, tool, routine or topic call.
 - Cycle times: a cycle's active time excludes the time spent `paused` (from the hold between two steps to the
   resume); its elapsed time includes it. `pausing` is not paused time: the step is still running.
+- Every line it logs, its step texts and its results are said with a code (cell_nodes.said): the app says them in
+  the user's language.
 """
 from __future__ import annotations
 
@@ -22,6 +24,8 @@ import dataclasses
 import threading
 from dataclasses import dataclass
 from typing import Any, Callable, Optional, Protocol, Sequence
+
+from cell_nodes.said import Said, say
 
 from .conditions import ConditionError, describe_value, field_value, holds
 from .config import (MoveNamed, MovePose, MoveRelative, ProcessConfig, Routine, Step, Tool, WaitTime, WaitTopic)
@@ -124,6 +128,20 @@ def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
 
 
+def _count(n: int, word: str) -> Said:
+    """"1 cycle", "3 operations", "2 times": the app picks the plural form of the user's language."""
+    return say(f"process.count_{word}", _plural(n, word), count=n)
+
+
+BY_OPERATOR = say("process.reason_operator", "stopped by the operator")
+DRY_SUFFIX = say("process.dry_suffix", " (dry run: no robot motion)")
+
+
+def _reason(e: BaseException) -> str:
+    """An exception's message, as said (str(e) would drop its code)."""
+    return e.args[0] if e.args and isinstance(e.args[0], str) else str(e)
+
+
 class Executor:
     def __init__(self, config: ProcessConfig, robot: Robot, clock: Clock, topics: Optional[Topics] = None,
                  on_progress: Callable[[Progress], None] = lambda p: None,
@@ -213,11 +231,11 @@ class Executor:
         """begin + run, for callers without a separate accept step."""
         why = self.begin(req)
         if why is not None:
-            self._log("warning", f"Start refused: {why}")
+            self._log("warning", say("process.start_refused", "Start refused: {reason}", reason=why))
             return RunResult(False, why, self._p.state if self._active else IDLE)
         return self.run(req)
 
-    def stop(self, message: str = "stopped by the operator") -> tuple[bool, str]:
+    def stop(self, message: str = BY_OPERATOR) -> tuple[bool, str]:
         """End the run now: the arm is stopped (driver stop), the step is not waited for. Answers after the stop."""
         return self._end_now(IDLE, message, "Stop")
 
@@ -244,13 +262,15 @@ class Executor:
 
     def _stop_robot(self, end_state: str, message: str, what: str, dry: bool, routine: bool) -> tuple[bool, str]:
         self._emit()
-        self._log("warning" if end_state == IDLE else "error", f"{what}: {message}")
+        self._log("warning" if end_state == IDLE else "error",
+                  say(f"process.{what.lower()}", what + ": {reason}", reason=message))
         if dry:
             return True, "stopped (dry run: no robot motion to stop)"
         if routine:
             ok, msg = self._call(self.robot.stop_routine)
             if not ok:
-                self._log("warning", f"the routines node's stop failed: {msg}")
+                self._log("warning", say("process.routines_stop_failed", "the routines node's stop failed: {reason}",
+                                         reason=msg))
         ok, msg = self._call(self.robot.stop)
         # A move that reached the driver just after our stop would run to its end: stop it again while it is out.
         t0 = last = self.clock.now()
@@ -260,7 +280,7 @@ class Executor:
                 last = self.clock.now()
             self.clock.sleep(POLL_S)
         if not ok:
-            self._log("error", f"the robot driver's stop failed: {msg}")
+            self._log("error", say("process.driver_stop_failed", "the robot driver's stop failed: {reason}", reason=msg))
             return False, f"stopping the arm failed: {msg}"
         return True, "stopped"
 
@@ -281,12 +301,15 @@ class Executor:
             step = self._p.step
         self._emit()
         if routine:
-            self._log("info", f"Pause: stopping the routine of '{step}' (it runs again from its start on resume)")
+            self._log("info", say("process.pause_routine",
+                                  "Pause: stopping the routine of '{step}' (it runs again from its start on resume)",
+                                  step=step))
             ok, msg = self._call(self.robot.stop_routine)
             if not ok:
-                self._log("warning", f"the routines node's stop failed: {msg}")
+                self._log("warning", say("process.routines_stop_failed", "the routines node's stop failed: {reason}",
+                                         reason=msg))
             return True, "pausing: the routine was stopped"
-        self._log("info", f"Pause: '{step}' finishes first")
+        self._log("info", say("process.pause", "Pause: '{step}' finishes first", step=step))
         return True, "pausing after the current step"
 
     def resume(self) -> tuple[bool, str]:
@@ -303,7 +326,7 @@ class Executor:
             self._apply(state=RUNNING)
         self._emit()
         if state == PAUSING:
-            self._log("info", "Resume: pause cancelled, the run goes on")
+            self._log("info", say("process.resume_pausing", "Resume: pause cancelled, the run goes on"))
             return True, "pause cancelled: the run goes on"
         return True, "resumed"
 
@@ -314,13 +337,17 @@ class Executor:
         ops = list(range(len(cfg.operations))) if req.operation < 0 else [req.operation]
         cycle = max(req.first_cycle, 1)
         done = 0
-        dry = " (dry run: no robot motion)" if req.dry_run else ""
+        dry = DRY_SUFFIX if req.dry_run else ""
+        forever = say("process.until_stopped", "until stopped")
         if req.operation >= 0:
-            times = "once" if req.cycles == 1 else ("until stopped" if req.cycles == 0 else f"{req.cycles} times")
-            self._log("info", f"Start: operation '{cfg.operations[req.operation].name}' {times}{dry}")
+            times = say("process.once", "once") if req.cycles == 1 else (forever if req.cycles == 0 else
+                                                                         _count(req.cycles, "time"))
+            self._log("info", say("process.start_operation", "Start: operation '{operation}' {times}{dry}",
+                                  operation=cfg.operations[req.operation].name, times=times, dry=dry))
         else:
-            many = "until stopped" if req.cycles == 0 else _plural(req.cycles, "cycle")
-            self._log("info", f"Start: {many} of {_plural(len(ops), 'operation')} from cycle {cycle}{dry}")
+            many = forever if req.cycles == 0 else _count(req.cycles, "cycle")
+            self._log("info", say("process.start_cycles", "Start: {cycles} of {operations} from cycle {cycle}{dry}",
+                                  cycles=many, operations=_count(len(ops), "operation"), cycle=cycle, dry=dry))
         self._emit(state=RUNNING, operation=-1, step_index=-1, step_count=0, step="", cycle=cycle, cycles_done=0,
                    cycle_start=self.clock.now(), cycle_paused_s=0.0, paused_since=0.0, message="running")
         try:
@@ -335,40 +362,47 @@ class Executor:
                     with self._lock:
                         active, elapsed = self._p.cycle_times(self.clock.now())
                     self._emit(cycles_done=done, last_cycle_s=active, last_cycle_elapsed_s=elapsed)
-                    paused = f" ({elapsed:.1f} s with pauses)" if elapsed - active >= 0.05 else ""
-                    self._log("info", f"Cycle {cycle} done in {active:.1f} s{paused}")
+                    paused = say("process.with_pauses", " ({seconds} s with pauses)", seconds=f"{elapsed:.1f}") \
+                        if elapsed - active >= 0.05 else ""
+                    self._log("info", say("process.cycle_done", "Cycle {cycle} done in {seconds} s{paused}", cycle=cycle,
+                                          seconds=f"{active:.1f}", paused=paused))
                 else:
                     self._emit(cycles_done=done)
                 cycle += 1
             if req.operation >= 0:
-                message = f"operation '{cfg.operations[req.operation].name}' done"
-                if req.cycles != 1:
-                    message += f" {_plural(done, 'time')}"
+                name = cfg.operations[req.operation].name
+                message = say("process.done_operation", "operation '{operation}' done", operation=name) \
+                    if req.cycles == 1 else say("process.done_operation_times", "operation '{operation}' done {times}",
+                                                operation=name, times=_count(done, "time"))
             else:
-                message = f"{_plural(done, 'cycle')} done"
+                message = say("process.done_cycles", "{cycles} done", cycles=_count(done, "cycle"))
             return self._finish(RunResult(True, message, IDLE, False, done, self._p.last_cycle_s,
                                           last_cycle_elapsed_s=self._p.last_cycle_elapsed_s), "info",
-                                f"Done: {message}")
+                                say("process.done", "Done: {result}", result=message))
         except _Stopped:
             # The interrupted step answers "stopped" as soon as the driver got the stop; the run ends (and the
             # action's result goes out) only once the driver reports the arm standing still.
             self._stop_done.wait(STOP_WAIT_S + 2.0)
             end_state, message = self._cancel or (IDLE, "stopped")
-            where = f" during '{self._p.step}'" if self._p.step else ""
-            text = f"{'Stopped' if end_state == IDLE else 'Error'}{where}: {message}"
+            how = "stopped" if end_state == IDLE else "error"
+            text = say(f"process.{how}_during", how.capitalize() + " during '{step}': {reason}", step=self._p.step,
+                       reason=message) if self._p.step else \
+                say(f"process.{how}", how.capitalize() + ": {reason}", reason=message)
             p = self._p
             return self._finish(RunResult(False, message, end_state, end_state == IDLE, done, p.last_cycle_s,
                                           p.operation, p.step_index, p.step, p.last_cycle_elapsed_s),
                                 "warning" if end_state == IDLE else "error", text)
         except _Failed as e:
-            message = str(e)
+            message = _reason(e)
             if not req.dry_run:
                 ok, why = self._call(self.robot.stop)   # whatever failed, leave the arm standing still
                 if not ok:
-                    self._log("warning", f"the robot driver's stop failed: {why}")
+                    self._log("warning", say("process.driver_stop_failed", "the robot driver's stop failed: {reason}",
+                                             reason=why))
             p = self._p
             return self._finish(RunResult(False, message, ERROR, False, done, p.last_cycle_s, p.operation,
-                                          p.step_index, p.step, p.last_cycle_elapsed_s), "error", f"Error: {message}")
+                                          p.step_index, p.step, p.last_cycle_elapsed_s), "error",
+                                say("process.error", "Error: {reason}", reason=message))
 
     def _finish(self, result: RunResult, level: str, text: str) -> RunResult:
         self._log(level, text)
@@ -386,13 +420,14 @@ class Executor:
 
     def _run_operation(self, oi: int, cycle: int, dry_run: bool) -> None:
         op = self.config.operations[oi]
-        self._log("info", f"Operation '{op.name}' (cycle {cycle})")
+        self._log("info", say("process.operation", "Operation '{operation}' (cycle {cycle})", operation=op.name,
+                              cycle=cycle))
         for si, step in enumerate(op.steps):
             text = describe(step, cycle, self.config.poses)
             while True:
                 self._checkpoint(text)
                 self._emit(state=RUNNING, operation=oi, step_index=si, step_count=len(op.steps), step=text)
-                self._log("info", f"Dry run: {text}" if dry_run else text)
+                self._log("info", say("process.dry_step", "Dry run: {step}", step=text) if dry_run else text)
                 ok, message = self._do(step, cycle, dry_run)
                 with self._lock:
                     cancelled = self._cancel is not None
@@ -401,12 +436,13 @@ class Executor:
                 if cancelled:
                     raise _Stopped()
                 if rerun:
-                    self._log("info", f"Routine {step.name} was stopped by the pause: it runs again on resume")
+                    self._log("info", say("process.routine_rerun", "Routine {name} was stopped by the pause: it runs again "
+                                          "on resume", name=step.name))
                     continue
                 if not ok:
-                    raise _Failed(f"{text} failed: {message}")
+                    raise _Failed(say("process.step_failed", "{step} failed: {reason}", step=text, reason=message))
                 break
-        self._log("info", f"Operation '{op.name}' done")
+        self._log("info", say("process.operation_done", "Operation '{operation}' done", operation=op.name))
 
     def _checkpoint(self, next_text: str) -> None:
         """Between two steps: end here if stopped; hold here while a pause is asked for."""
@@ -418,7 +454,8 @@ class Executor:
             self._apply(state=PAUSED, paused_since=self.clock.now())
             after = self._p.step
         self._emit()
-        self._log("info", f"Paused after '{after}'; next: '{next_text}'" if after else f"Paused; next: '{next_text}'")
+        self._log("info", say("process.paused_after", "Paused after '{after}'; next: '{next}'", after=after, next=next_text)
+                  if after else say("process.paused", "Paused; next: '{next}'", next=next_text))
         while True:
             with self._lock:
                 if self._cancel is not None:
@@ -426,7 +463,7 @@ class Executor:
                 if not self._pause:
                     break
             self.clock.sleep(POLL_S)
-        self._log("info", f"Resumed: next '{next_text}'")
+        self._log("info", say("process.resumed", "Resumed: next '{next}'", next=next_text))
 
     # ------------------------------------------------------------------------------------------- steps
     def _calls(self) -> int:

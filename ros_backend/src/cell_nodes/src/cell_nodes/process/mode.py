@@ -11,8 +11,9 @@ paused, `idle` when it ends (done, stopped or failed). Set through the operation
 """
 from __future__ import annotations
 
-from typing import Optional, Sequence
+from typing import Any, Optional, Sequence
 
+from ..said import Said, say
 from .executor import ERROR, IDLE, PAUSED, PAUSING, RUNNING
 
 SOURCE = "process"
@@ -36,7 +37,7 @@ class ModeFollower:
         return self.mode is not None and self.mode == self.alarm_mode
 
     def refusal(self) -> Optional[str]:
-        return "the cell is in alarm: reset it first" if self.in_alarm() else None
+        return say("process.reason_alarm_mode", "the cell is in alarm: reset it first") if self.in_alarm() else None
 
     def transition(self, state: str) -> Optional[str]:
         """The process state changed: the mode to set now, if any (each target once per transition)."""
@@ -62,3 +63,15 @@ class ModeFollower:
         if self.mode_source in (self.source, ALARMS_SOURCE):
             return "idle"
         return None
+
+
+def alarm_reason(source: str, status: Any) -> Said:
+    """Why a run ended when the mode turned alarm: the alarm named as the alarms node's status (cell_msgs/SafetyStatus:
+    its most severe active alarm) gives it, when it has one; its code is the alarms feature's (`alarm.<code>`)."""
+    src = source or "unknown"
+    if status is not None and getattr(status, "active_count", 0) and getattr(status, "alarm_id", ""):
+        code = getattr(status, "code", "")
+        alarm = Said(status.text, f"alarm.{code}" if code else "", [(p.key, p.value) for p in status.params])
+        return say("process.reason_alarm_named", "the cell went into alarm ({source}): {alarm_id}: {alarm}; the run "
+                   "was stopped", source=src, alarm_id=status.alarm_id, alarm=alarm)
+    return say("process.reason_alarm", "the cell went into alarm ({source}): the run was stopped", source=src)

@@ -5,6 +5,8 @@ from typing import Mapping, Sequence
 
 from cell_nodes.manual.frames import relative_target
 
+from cell_nodes.said import say
+
 from .config import MoveNamed, MovePose, MoveRelative, Routine, Step, Tool, WaitTime, WaitTopic
 
 AXES = ("x", "y", "z", "rx", "ry", "rz")
@@ -29,30 +31,37 @@ def _value(v: object) -> str:
 
 
 def describe(step: Step, cycle: int, poses: Mapping[str, Sequence[Sequence[float]]]) -> str:
-    """The step's text: its own `text` if the cell file gives one ({n}: the pose-table entry's number)."""
+    """The step's text: its own `text` if the cell file gives one ({n}: the pose-table entry's number); else what it
+    does, said with a code (cell_nodes.said) so the app says it in the user's language."""
     n = table_index(cycle, len(poses[step.table])) + 1 if isinstance(step, MovePose) and step.table else 0
     if step.text:
         return step.text.replace("{n}", str(n)) if n else step.text
-    note = f" ({step.note})" if getattr(step, "note", "") else ""
+    note_text = getattr(step, "note", "")
+    note: object = say("process.step_note", " ({note})", note=note_text) if note_text else ""
     if isinstance(step, MoveNamed):
-        return f"Move to {step.name}"
+        return say("process.step_move_named", "Move to {name}", name=step.name)
     if isinstance(step, MoveRelative):
-        parts = [f"{a} {v:+g}{' m' if i < 3 else ' rad'}" for i, (a, v) in enumerate(zip(AXES, step.offset)) if v]
-        frame = " (tool)" if step.frame == "tool" else ""
-        return f"Move relative {', '.join(parts) or '0'}{frame}{note}"
+        parts = ", ".join(f"{a} {v:+g}{' m' if i < 3 else ' rad'}" for i, (a, v) in enumerate(zip(AXES, step.offset)) if v)
+        if step.frame == "tool":
+            return say("process.step_move_relative_tool", "Move relative {offset} (tool){note}", offset=parts or "0",
+                       note=note)
+        return say("process.step_move_relative", "Move relative {offset}{note}", offset=parts or "0", note=note)
     if isinstance(step, MovePose):
         if step.table:
-            return f"Move to {step.table} {n}{note}"
+            return say("process.step_move_table", "Move to {table} {n}{note}", table=step.table, n=n, note=note)
         x, y, z = (_num(v) for v in step.pose[:3])
-        return f"Move to pose (x {x}, y {y}, z {z}){note}"
+        return say("process.step_move_pose", "Move to pose (x {x}, y {y}, z {z}){note}", x=x, y=y, z=z, note=note)
     if isinstance(step, Tool):
-        return f"{step.tool[:1].upper()}{step.tool[1:]} {step.action}"
+        # The tool's and the action's names are the cell file's (manual.tools): as they are, in every language.
+        return say("process.step_tool", "{tool} {action}", tool=f"{step.tool[:1].upper()}{step.tool[1:]}",
+                   action=step.action)
     if isinstance(step, WaitTime):
-        return f"Wait {_num(step.seconds)} s"
+        return say("process.step_wait", "Wait {seconds} s", seconds=_num(step.seconds))
     if isinstance(step, WaitTopic):
-        return f"Wait for {step.topic} {step.field} {CONDITION_SIGNS[step.condition]} {_value(step.value)}"
+        return say("process.step_wait_topic", "Wait for {topic} {field} {sign} {value}", topic=step.topic,
+                   field=step.field, sign=CONDITION_SIGNS[step.condition], value=_value(step.value))
     if isinstance(step, Routine):
-        return f"Run routine {step.name}"
+        return say("process.step_routine", "Run routine {name}", name=step.name)
     raise TypeError(f"not a step: {step!r}")
 
 
