@@ -1,8 +1,9 @@
 import { describe, it, expect, afterEach } from 'vitest';
 import { setLocale } from '../../src/lib/paraglide/runtime.js';
-import { saidKey, saidText, paramsOf } from '../../src/lib/core/said.js';
+import { saidKey, saidText, paramsOf, localized } from '../../src/lib/core/said.js';
 import { logLines } from '../../src/lib/ui/log.js';
 import { processView, processNames } from '../../src/lib/features/process/logic.js';
+import { runView } from '../../src/lib/features/routines/logic.js';
 
 /** @param {Array<[string, string]>} kv */
 const kvs = (kv) => kv.map(([key, value]) => ({ key, value }));
@@ -64,5 +65,62 @@ describe('what a node said, in the user\'s language', () => {
       message: "operation 'pick part' done", message_code: 'process.done_operation', message_params: kvs([['operation', 'pick part']]) }, [], processNames(titles));
     expect(v.step).toBe('Mover a home');
     expect(v.message).toBe('operación «Recoger pieza» hecha');
+  });
+
+  it("a step's own text and note by the cell file's text in the language, a pose-table number kept", () => {
+    const texts = [
+      { en: 'Lift the part', es: 'Levantar la pieza' },
+      { en: 'Pick part {n} again', es: 'Recoger la pieza {n} otra vez' },
+      { en: 'approach', es: 'aproximación' },
+    ];
+    const names = processNames(titles, texts);
+    const lift = { step: 'Lift the part', step_code: 'process.step_text', step_params: kvs([['text', 'Lift the part']]) };
+    const again = { step: 'Pick part 3 again', step_code: 'process.step_text', step_params: kvs([['text', 'Pick part 3 again']]) };
+    const table = {
+      step: 'Move to part 2 (approach)', step_code: 'process.step_move_table',
+      step_params: kvs([['table', 'part'], ['n', '2'], ['note', ' (approach)'], ['note.code', 'process.step_note'], ['note.note', 'approach']]),
+    };
+    const other = { step: 'Wipe (1+1)', step_code: 'process.step_text', step_params: kvs([['text', 'Wipe (1+1)']]) };
+    expect(processView({ state: 'running', ...lift }, [], names).step).toBe('Lift the part');
+    setLocale('es', { reload: false });
+    expect(processView({ state: 'running', ...lift }, [], names).step).toBe('Levantar la pieza');
+    expect(processView({ state: 'running', ...again }, [], names).step).toBe('Recoger la pieza 3 otra vez');
+    expect(processView({ state: 'running', ...table }, [], names).step).toBe('Mover a part 2 (aproximación)');
+    // A text the cell file gives in one language only: the node's English.
+    expect(processView({ state: 'running', ...other }, [], names).step).toBe('Wipe (1+1)');
+  });
+});
+
+describe("a service's answer with a code (the manual driver's moves, tool actions, previews)", () => {
+  it('its message in the language, every other field as it came; an answer without a code as is', () => {
+    const arrived = { success: true, message: 'arrived at home', code: 'manual.arrived_at', params: kvs([['name', 'home']]) };
+    expect(localized(arrived)).toEqual(arrived);
+    setLocale('es', { reload: false });
+    expect(localized(arrived)).toEqual({ ...arrived, message: 'se alcanzó home' });
+    const refused = {
+      reachable: false, message: 'unknown configuration \'x\' for group arm (it has: home)', code: 'manual.unknown_configuration',
+      params: kvs([['name', 'x'], ['group', 'arm'], ['known', 'home']]), positions: [],
+    };
+    expect(localized(refused).message).toBe('configuración desconocida «x» para el grupo arm (tiene: home)');
+    expect(localized(refused).positions).toBe(refused.positions);
+    const plain = { success: false, message: 'stopped' };
+    expect(localized(plain)).toBe(plain);
+    expect(localized(null)).toBe(null);
+  });
+});
+
+describe("the routines node's run state", () => {
+  it("says a failed step with the driver's reason inside, all in the language", () => {
+    const failed = {
+      state: 'idle', name: 'pick two', message: 'step 2 of 3 (pose x 412.3, y -120.0, z 230.5 mm) failed: protective stop is active: clear it first',
+      message_code: 'routines.step_failed',
+      message_params: kvs([['step', '2'], ['total', '3'], ['what', 'pose x 412.3, y -120.0, z 230.5 mm'], ['what.code', 'routines.step_pose'],
+        ['what.x', '412.3'], ['what.y', '-120.0'], ['what.z', '230.5'], ['why', 'protective stop is active: clear it first'],
+        ['why.code', 'manual.protective_stop']]),
+    };
+    expect(runView(failed).message).toBe(failed.message);
+    setLocale('es', { reload: false });
+    expect(runView(failed).message).toBe('el paso 2 de 3 (pose x 412,3, y -120,0, z 230,5 mm) falló: la parada de protección está activa: restablézcala primero');
+    expect(runView({ state: 'idle', message: 'stopped' }).message).toBe('stopped');
   });
 });

@@ -22,6 +22,15 @@ export function paramsOf(list) {
   return out;
 }
 
+/**
+ * A number the node wrote, in the user's locale with the decimals the node gave ("-120.0" -> "-120,0" in Spanish).
+ * @param {string} v
+ */
+function localNumber(v) {
+  const decimals = (v.split('.')[1] ?? '').length;
+  return fmtNumber(Number(v), { minimumFractionDigits: decimals, maximumFractionDigits: decimals });
+}
+
 /** @param {string} code @returns {string} the catalogue key */
 export function saidKey(code) {
   if (code.startsWith('alarm.')) return `alarms_code_${code.slice(6).replaceAll('.', '_')}`;
@@ -59,8 +68,22 @@ export function saidText(code, params, text, rename) {
     } else if (k === 'count') {
       p[k] = Number(v);   // for the plural's choice
     } else {
-      p[k] = rename?.(k, v) ?? (NUMBER.test(v) ? fmtNumber(Number(v)) : v);
+      p[k] = rename?.(k, v) ?? (NUMBER.test(v) ? localNumber(v) : v);
     }
   }
   return say(p);
+}
+
+/**
+ * A service response (or a message) whose `message` has a code: the same object with the message in the user's
+ * language (cell_msgs MoveNamed, ToolAction, PreviewMove, ...: `code`, `params` beside `message`). Anything else as is.
+ * @template T
+ * @param {T} r
+ * @param {string} [codeKey] @param {string} [paramsKey]
+ * @returns {T}
+ */
+export function localized(r, codeKey = 'code', paramsKey = 'params') {
+  const v = /** @type {any} */ (r);
+  if (!v || typeof v !== 'object' || typeof v[codeKey] !== 'string' || !v[codeKey] || typeof v.message !== 'string') return r;
+  return { ...v, message: saidText(v[codeKey], paramsOf(v[paramsKey]), v.message) };
 }

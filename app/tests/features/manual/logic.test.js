@@ -271,6 +271,7 @@ describe('what the page shows', () => {
     expect(pickState({ progress: 7 }).progress).toBe(1);
     expect(pickState({}).progress).toBe(1);
   });
+
 });
 
 describe('manualGate: may motion controls be used, and why not', () => {

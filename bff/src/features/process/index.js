@@ -15,6 +15,9 @@ export default defineFeature({
     operations: (section.operations || []).map(operationName),
     // What the page shows for an operation, by name (a text per language), where the cell file gives one.
     titles: Object.fromEntries((section.operations || []).filter((o) => o?.title).map((o) => [o.name, o.title])),
+    // The steps' own texts and notes given per language: the node says them in English, the page in the user's.
+    step_texts: (section.operations || []).flatMap((o) => (Array.isArray(o?.steps) ? o.steps : []))
+      .flatMap((s) => [s?.text, s?.note]).filter((t) => t && typeof t === 'object'),
     status_fields: section.status_fields || [],
     start_configuration: section.start_configuration ?? null,
   }),

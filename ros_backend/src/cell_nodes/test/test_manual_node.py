@@ -72,6 +72,7 @@ def test_services_topics_and_a_jog_through_ros(node) -> None:
     assert (s.controller, s.robot_mode, s.safety_mode, s.program_running) == (HOST, "RUNNING", "NORMAL", False)
     assert len(s.joint_positions) == 6 and len(s.tcp_pose) == 6 and len(s.tcp_speed) == 6
     assert s.message == f"connected to the robot controller at {HOST}" and s.motion == "idle"
+    assert (s.message_code, [(kv.key, kv.value) for kv in s.message_params]) == ("manual.connected", [("host", HOST)])
     assert s.motion_group == "arm"                      # the topic's group
     topics = {name for name, _ in rospy.get_published_topics()}
     assert "/cell/manual/state" not in topics and "/cell/manual/tcp_pose" not in topics
@@ -90,7 +91,8 @@ def test_services_topics_and_a_jog_through_ros(node) -> None:
 
     move_named = rospy.ServiceProxy("/cell/manual/move_named", MoveNamed)
     r = move_named(group="arm", name="home", speed=1.0, acceleration=1.5)
-    assert (r.success, r.message) == (True, "arrived at home")
+    assert (r.success, r.message, r.code, [(kv.key, kv.value) for kv in r.params]) == (
+        True, "arrived at home", "manual.arrived_at", [("name", "home")])
     got = rospy.ServiceProxy("/cell/manual/get_pose", GetPose)(group="arm")
     assert got.success and max(abs(a - b) for a, b in zip(got.joint_positions, [0.0, -1.5708, 1.5708, -1.5708,
                                                                                  -1.5708, 0.0])) < 0.01
@@ -101,6 +103,7 @@ def test_services_topics_and_a_jog_through_ros(node) -> None:
                - 0.03) < 0.001
     r = move_named(group="arm", name="nowhere", speed=0, acceleration=0)
     assert not r.success and r.message.startswith("unknown configuration 'nowhere'")
+    assert r.code == "manual.unknown_configuration" and ("name", "nowhere") in [(kv.key, kv.value) for kv in r.params]
     r = rospy.ServiceProxy("/cell/manual/tool", ToolAction)(tool="gripper", action="close")
     assert (r.success, r.message) == (True, "gripper close done")
     wait_for(lambda: state.msg.message == "gripper close done", 2, what="the result in the state")
@@ -119,6 +122,8 @@ def test_services_topics_and_a_jog_through_ros(node) -> None:
     wait_for(lambda: state.msg.motion == "idle" and max(abs(v) for v in joints.msg.velocity) < 0.01, 2,
              what="standstill after the heartbeats stopped")
     assert state.msg.message == "jog stopped: no heartbeat for 0.2 s"
+    assert (state.msg.message_code, [(kv.key, kv.value) for kv in state.msg.message_params]) == (
+        "manual.jog_no_heartbeat", [("seconds", "0.2")])
     assert joints.msg.position[5] - q0 > 0.2
     r = rospy.ServiceProxy("/cell/manual/stop", Trigger)()
     assert (r.success, r.message) == (True, "stopped")
@@ -140,6 +145,7 @@ def test_preview_move_through_ros(node) -> None:
     r = preview(group="arm", kind="jump")
     assert (r.reachable, r.message, list(r.positions)) == (False, "unknown move kind 'jump' (named, relative or pose)",
                                                           [])
+    assert (r.code, [(kv.key, kv.value) for kv in r.params]) == ("manual.unknown_kind", [("kind", "jump")])
 
 
 def test_the_driver_reports_its_controller_link_and_joint_state_rate_on_diagnostics(node) -> None:

@@ -24,6 +24,17 @@ def test_state_machine_accepts_listed_modes_and_refuses_others() -> None:
     assert m.state.mode == "running" and m.state.source == "ui:alice"
 
 
+def test_a_change_unless_the_mode_is_one_given_is_checked_with_the_change() -> None:
+    """The process sets `idle` when its run ended, unless the alarms node set `alarm` in the meantime."""
+    m = OperationMode(MODES, "running")
+    assert m.set("alarm", "alarms") == (True, "mode is now alarm")
+    ok, why = m.set("idle", "process", unless=["alarm"])
+    assert not ok and why == "the mode is alarm (set by alarms): not changed to idle"
+    assert (m.state.mode, m.state.source) == ("alarm", "alarms")
+    assert m.set("manual", "ui:alice")[0]                      # anyone else still may (an operator recovering)
+    assert m.set("idle", "process", unless=["alarm"]) == (True, "mode is now idle")
+
+
 def test_state_machine_rejects_bad_initial() -> None:
     with pytest.raises(ValueError):
         OperationMode(MODES, "flying")
@@ -65,6 +76,8 @@ def test_node_publishes_latched_mode_and_serves_get_set(mode_node) -> None:
     bad = set_(mode="flying", source="test")
     assert not bad.success and "flying" in bad.message
     assert get().mode == "manual"
+    kept = set_(mode="idle", source="process", unless_mode=["manual"])
+    assert not kept.success and get().mode == "manual"
 
 
 def test_node_adopts_a_mode_published_from_outside(mode_node) -> None:

@@ -24,6 +24,7 @@ from cell_nodes.said import Said, coded, say
 from cell_nodes.process.steps import describe, resolve_pose, table_index
 
 from conftest import wait_for
+from said_check import check_said
 
 ROOT = Path(__file__).resolve().parents[4]
 MANUAL = {
@@ -185,53 +186,6 @@ class FakeTopics:
             cb(msg)
 
 
-# ------------------------------------------------------------------------------------------- said texts
-APP_MESSAGES = Path(__file__).resolve().parents[4] / "app" / "messages"
-LANGS = ("en", "es", "fi", "de")
-_catalogues: dict[tuple[str, str], dict[str, Any]] = {}
-
-
-def _catalogue(feature: str, lang: str) -> dict[str, Any]:
-    if (feature, lang) not in _catalogues:
-        _catalogues[feature, lang] = json.loads((APP_MESSAGES / feature / f"{lang}.json").read_text())
-    return _catalogues[feature, lang]
-
-
-def _templates(entry: Any, count: Optional[str]) -> tuple[list[str], str]:
-    """A catalogue entry's texts (every plural form) and the one English uses for this count."""
-    if isinstance(entry, str):
-        return [entry], entry
-    forms = entry[0]["match"]
-    return list(forms.values()), forms["countPlural=one" if count == "1" else "countPlural=other"]
-
-
-def check_said(text: str) -> None:
-    """A text a node says with a code: its key is in every language's catalogue (app/src/lib/core/said.js), with the
-    same parameters; the English catalogue text is the node's English; nested parameters alike."""
-    code, params = coded(text)
-    if not code:
-        return
-    flat = dict(params)
-    top = {k: v for k, v in params if "." not in k}
-    if code.startswith("alarm."):   # an alarm's code: the alarms feature's catalogue (test_alarms_logic.py)
-        for lang in LANGS:
-            assert "alarms_code_" + code[6:].replace(".", "_") in _catalogue("alarms", lang), (lang, code)
-        return
-    feature, rest = code.split(".", 1)
-    key = f"{feature}_said_{rest.replace('.', '_')}"
-    for lang in LANGS:
-        cat = _catalogue(feature, lang)
-        assert key in cat, f"{lang}: no {key} for {text!r}"
-        forms, _ = _templates(cat[key], top.get("count"))
-        for form in forms:
-            assert set(re.findall(r"\{(\w+)\}", form)) == set(top), (lang, key, form, top)
-    assert _templates(_catalogue(feature, "en")[key], top.get("count"))[1].format(**top) == str(text), (key, text)
-    for k, v in top.items():
-        if f"{k}.code" in flat:
-            check_said(Said(v, flat[f"{k}.code"], [(kk[len(k) + 1:], vv) for kk, vv in params
-                                                    if kk.startswith(f"{k}.") and kk != f"{k}.code"]))
-
-
 class Harness:
     def __init__(self, cfg=None, step_s: float = 1.0) -> None:
         self.clock = FakeClock()
@@ -281,6 +235,21 @@ def test_demo_cell_section_parses_with_the_demo_manual_section() -> None:
     texts = [describe(s, 2, cfg.poses) for op in cfg.operations for s in op.steps]
     assert "Move to home" in texts and "Gripper close" in texts and "Move to part 2 (approach)" in texts
     assert "Move to pocket 2" in texts
+    # The cell file's own texts per language: the node keeps the English, said as a step text the app translates.
+    lift = next(t for t in texts if t == "Lift the part")
+    assert coded(lift) == ("process.step_text", [("text", "Lift the part")])
+    check_said(lift)
+    assert "Move to part 2 (approach)" in texts
+
+
+def test_a_step_text_per_language_keeps_the_english_and_needs_it() -> None:
+    ops = [{"name": "op", "steps": [{"move_named": "home", "text": {"en": "Go {n} home", "es": "Ir a casa"}},
+                                    {"move_pose": "part", "note": {"en": "slow", "fi": "hidas"}}]}]
+    cfg = config(_with(operations=ops))
+    assert [s.text for s in cfg.operations[0].steps] == ["Go {n} home", ""]
+    assert cfg.operations[0].steps[1].note == "slow"
+    with pytest.raises(ConfigError, match=r"steps\[0\]\.text\.en"):
+        config(_with(operations=[{"name": "op", "steps": [{"move_named": "home", "text": {"es": "Ir a casa"}}]}]))
 
 
 def test_section_fields() -> None:
@@ -375,11 +344,13 @@ def test_step_texts() -> None:
                      "Move relative x +0.05 m, rz +0.3 rad (tool)", "Wait for /x data = true",
                      "Wait for /f wrench.force.z < -3.5", "Run routine pick2", "Into pocket 2", "Settle"]
     # Each says what it is with a code and parameters (the app's catalogue, process_said_<code>); the cell file's
-    # own texts have none.
+    # own texts as a step text (the app finds them in the cell file's texts per language; {n} filled in).
     assert [coded(t)[0] for t in texts] == [
         "process.step_move_named", "process.step_tool", "process.step_wait", "process.step_move_table",
         "process.step_move_pose", "process.step_move_relative", "process.step_move_relative_tool",
-        "process.step_wait_topic", "process.step_wait_topic", "process.step_routine", "", ""]
+        "process.step_wait_topic", "process.step_wait_topic", "process.step_routine", "process.step_text",
+        "process.step_text"]
+    assert coded(texts[10])[1] == [("text", "Into pocket 2")]
     assert coded(texts[3])[1] == [("table", "part"), ("n", "2"), ("note", " (approach)"),
                                   ("note.code", "process.step_note"), ("note.note", "approach")]
     assert coded(texts[1])[1] == [("tool", "Gripper"), ("action", "close")]

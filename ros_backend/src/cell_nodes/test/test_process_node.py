@@ -83,7 +83,12 @@ class StandInDriver:
         with self._lock:
             return [c[0] for c in self.calls]
 
-    def _do(self, kind: str, *args: Any) -> tuple[bool, str]:
+    def _do(self, kind: str, *args: Any) -> dict[str, Any]:
+        """The fake's answer as fields: the move services' responses also carry a code, left empty here."""
+        ok, message = self._answer(kind, *args)
+        return {"success": ok, "message": message}
+
+    def _answer(self, kind: str, *args: Any) -> tuple[bool, str]:
         with self._lock:
             self.calls.append((kind, *args))
             self._stopped.clear()

@@ -22,6 +22,7 @@ from cell_nodes.routines.model import (ACTION, POSE, Routine, RoutineError, Step
 from cell_nodes.routines.runner import IDLE, RUNNING, STOPPING, RunState, Runner
 from cell_nodes.routines.store import RoutineStore
 from conftest import wait_for
+from said_check import check_said
 
 ROOT = Path(__file__).resolve().parents[4]
 DEMO = yaml.safe_load((ROOT / "config" / "demo-cell.yaml").read_text())
@@ -83,9 +84,19 @@ class FakeRobot:
 def make(tmp_path: Path, robot: Optional[FakeRobot] = None, cfg: Optional[RoutinesConfig] = None):
     robot = robot or FakeRobot()
     log = LogBook()
+    add = log.add
+
+    def checked_add(level: str, text: str) -> None:
+        check_said(text)  # every log line of every test here: its code and the app's catalogues agree
+        add(level, text)
+    log.add = checked_add  # type: ignore[method-assign]
     r = Routines(cfg or config(), RoutineStore(str(tmp_path / "routines")), robot, log)
     states: list[RunState] = []
-    r.runner.on_state = states.append
+
+    def on_state(s: RunState) -> None:
+        check_said(s.message)
+        states.append(s)
+    r.runner.on_state = on_state
     return r, robot, log, states
 
 

@@ -147,6 +147,7 @@ def test_record_save_run_stop_through_ros(cell: Cell) -> None:
                                                      group="arm", tool="gripper", steps=steps, overwrite=overwrite)
     r = save("pick two", draft)
     assert (r.success, r.message) == (True, "routine pick two saved (3 steps)")
+    assert r.code == "routines.saved" and ("steps.code", "routines.steps") in [(kv.key, kv.value) for kv in r.params]
     r = save("pick two", draft)
     assert (r.success, r.message) == (False, "a routine named 'pick two' exists already")
     r = save("../pick", draft)
@@ -170,7 +171,7 @@ def test_record_save_run_stop_through_ros(cell: Cell) -> None:
     t0 = time.monotonic()
     r = call("/cell/routines/run", RunRoutine, name="pick two")
     took = time.monotonic() - t0
-    assert (r.success, r.message) == (True, "routine pick two done")
+    assert (r.success, r.message, r.code) == (True, "routine pick two done", "routines.done")
     tcp = [m.tcp_pose for m in robot.since(t0) if len(m.tcp_pose) == 6]
     near1 = min(dist(p, r1.step.pose) for p in tcp)
     final = pose_now()
@@ -185,6 +186,9 @@ def test_record_save_run_stop_through_ros(cell: Cell) -> None:
     assert states == [("running", 0, 3), ("running", 1, 3), ("running", 2, 3), ("running", 3, 3), ("idle", 0, 3)]
     wait_for(lambda: log.msg.entries[-1].text == "Routine pick two done", 5, what="the log's last entry")
     texts = [e.text for e in log.msg.entries]
+    assert [e.code for e in log.msg.entries][2:] == [
+        "routines.action_recorded", "routines.saved_log", "routines.started_log", "routines.step_reached",
+        "routines.step_done", "routines.step_reached", "routines.done_log"]
     assert texts[:2] == [r1.message, r2.message] and texts[2] == "Gripper close recorded"
     assert texts[3:5] == ["Routine pick two saved (3 steps)", "Routine pick two started (3 steps, group arm)"]
     assert texts[5].startswith("Step 1 of 3 reached: pose x ") and texts[6] == "Step 2 of 3 done: gripper close"
@@ -217,6 +221,8 @@ def test_record_save_run_stop_through_ros(cell: Cell) -> None:
     assert min(dist(here, r1.step.pose), dist(here, r2.step.pose)) > 0.002  # stopped on the way, not at a target
     wait_for(lambda: (run_state.msg.state, run_state.msg.step, run_state.msg.message) ==
              ("idle", 0, "routine back and forth stopped"), 5, what="the run state: idle after the stop")
+    assert (run_state.msg.message_code, [(kv.key, kv.value) for kv in run_state.msg.message_params]) == (
+        "routines.stopped", [("name", "back and forth")])
     wait_for(lambda: re.fullmatch(r"Routine back and forth stopped at step [234] of 4", log.msg.entries[-1].text), 5,
              what="the stop in the log")
     assert log.msg.entries[-1].level == "warning"

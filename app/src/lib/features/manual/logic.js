@@ -9,6 +9,7 @@
 import { commandGate } from '../../core/gate.js';
 import { m } from '$lib/paraglide/messages.js';
 import { fmtFixed } from '../../core/i18n.js';
+import { paramsOf, saidText } from '../../core/said.js';
 
 export const FEATURE_ID = 'manual';
 
@@ -491,7 +492,7 @@ export function pickState(msg) {
     motion_group: str(msg?.motion_group),
     motion_target: str(msg?.motion_target),
     progress: typeof msg?.progress === 'number' ? clamp(msg.progress, 0, 1) : 1,
-    message: str(msg?.message),
+    message: saidText(str(msg?.message_code), paramsOf(msg?.message_params), str(msg?.message)),
     joint_positions: nums(msg?.joint_positions),
     tcp_pose: nums(msg?.tcp_pose),
     tcp_speed: nums(msg?.tcp_speed),

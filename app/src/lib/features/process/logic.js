@@ -108,12 +108,35 @@ function said(text, code, params, rename) {
 }
 
 /**
- * How the process's texts name a parameter: an operation by its title in the cell file (user's language).
+ * How the process's texts name a parameter: an operation by its title in the cell file, a step's own text or note
+ * by the cell file's text in the user's language (the node says the English; `{n}` in it: the pose-table entry's
+ * number, the same in every language).
  * @param {Record<string, unknown>} titles  title by name
+ * @param {unknown[]} [stepTexts]  the steps' texts given per language (/api/config features.process.step_texts)
  * @returns {import('../../core/said.js').Rename}
  */
-export function processNames(titles) {
-  return (key, value) => (key === 'operation' ? operationText(value, titles) : undefined);
+export function processNames(titles, stepTexts = []) {
+  return (key, value) => (key === 'operation' ? operationText(value, titles)
+    : key === 'text' || key === 'note' ? stepText(value, stepTexts) : undefined);
+}
+
+const REGEX_SPECIAL = /[.*+?^${}()|[\]\\]/g;
+
+/**
+ * The cell file's text, in the user's language, of a step text the node said in English; undefined: none given.
+ * @param {string} english @param {unknown[]} stepTexts
+ * @returns {string | undefined}
+ */
+export function stepText(english, stepTexts) {
+  for (const t of Array.isArray(stepTexts) ? stepTexts : []) {
+    const en = t && typeof t === 'object' ? /** @type {Record<string, unknown>} */ (t).en : undefined;
+    if (typeof en !== 'string') continue;
+    if (en === english) return cellText(t);
+    if (!en.includes('{n}')) continue;
+    const match = new RegExp(`^${en.split('{n}').map((p) => p.replace(REGEX_SPECIAL, '\\$&')).join('(\\d+)')}$`).exec(english);
+    if (match) return cellText(t).replaceAll('{n}', match[1]);
+  }
+  return undefined;
 }
 
 /** @param {ProcessStateName} s */

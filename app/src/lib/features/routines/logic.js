@@ -6,6 +6,7 @@
 
 import { m } from '$lib/paraglide/messages.js';
 import { fmtFixed } from '../../core/i18n.js';
+import { paramsOf, saidText } from '../../core/said.js';
 
 export const FEATURE_ID = 'routines';
 
@@ -139,7 +140,7 @@ export function routineSummary(r) {
 /** @param {any} msg  cell_msgs/RoutineRunState @returns {RunView} */
 export function runView(msg) {
   const state = msg?.state === 'running' || msg?.state === 'stopping' ? msg.state : 'idle';
-  return { name: String(msg?.name ?? ''), state, step: Number(msg?.step) || 0, total: Number(msg?.total) || 0, message: String(msg?.message ?? '') };
+  return { name: String(msg?.name ?? ''), state, step: Number(msg?.step) || 0, total: Number(msg?.total) || 0, message: saidText(String(msg?.message_code ?? ''), paramsOf(msg?.message_params), String(msg?.message ?? '')) };
 }
 
 /**

@@ -2,6 +2,7 @@
  * Where the next move would take the arm (the Manual page's move panel asks the driver, /cell/manual/preview_move),
  * for the 3D view to draw as a ghost. One at a time: the move the user is setting up.
  */
+import { localized } from '../../core/said.js';
 
 /**
  * @typedef {{ group: string, kind: 'named' | 'relative' | 'pose', reachable: boolean, message: string,
@@ -32,6 +33,7 @@ export const movePreview = new PreviewStore();
  * @returns {MovePreview}
  */
 export function previewFrom(group, kind, r) {
+  r = localized(r);
   const names = Array.isArray(r?.joint_names) ? r.joint_names : [];
   const pos = Array.isArray(r?.positions) ? r.positions : [];
   const reachable = r?.reachable === true && names.length > 0 && names.length === pos.length;

@@ -17,7 +17,8 @@ from dataclasses import replace
 from typing import Callable, Mapping, Optional, Protocol, Sequence
 
 from .config import Arm, Group, ManualConfig, plan_arms
-from .driver import DriverState, Snapshot
+from ..said import Said, say
+from .driver import DriverState, Snapshot, unknown_group, unknown_tool
 from .limits import Limits
 
 
@@ -105,11 +106,8 @@ class CellDriver:
         return results
 
     # ================================================================ routing
-    def _group_names(self) -> str:
-        return ", ".join(self.config.groups) or "none"
-
-    def _unknown_group(self, group: str) -> str:
-        return f"unknown motion group {group!r} (the cell has: {self._group_names()})"
+    def _unknown_group(self, group: str) -> Said:
+        return unknown_group(group, list(self.config.groups))
 
     def arm_of(self, group: str) -> Optional[Arm]:
         i = self._group_arm.get(group)
@@ -162,7 +160,7 @@ class CellDriver:
     def tool_action(self, tool: str, action: str) -> tuple[bool, str]:
         d = self.driver_of_tool(tool)
         if d is None:
-            return False, f"unknown tool {tool!r} (the cell has: {', '.join(self.config.tools) or 'none'})"
+            return False, unknown_tool(tool, list(self.config.tools))
         return d.tool_action(tool, action)
 
     def stop(self) -> tuple[bool, str]:
@@ -171,18 +169,24 @@ class CellDriver:
         results = self._each(lambda d: d.stop())
         if len(results) == 1 and not isinstance(results[0], Exception):
             return results[0]  # type: ignore[return-value]
-        failed, stopped = [], []
+        failed: list[Said] = []
+        stopped: list[str] = []
         for arm, r in zip(self.arms, results):
             label = ", ".join(arm.groups)
             if isinstance(r, Exception):
-                failed.append(f"{label}: the stop failed ({r})")
+                failed.append(say("manual.stop_failed", "{arms}: the stop failed ({error})", arms=label, error=r))
             elif r[0]:  # type: ignore[index]
                 stopped.append(label)
             else:
-                failed.append(f"{label}: {r[1]}")  # type: ignore[index]
+                failed.append(say("manual.stop_not_confirmed", "{arms}: {why}", arms=label, why=r[1]))  # type: ignore[index]
         if not failed:
-            return True, "stopped"
-        return False, "; ".join(failed) + (f" ({', '.join(stopped)} stopped)" if stopped else "")
+            return True, say("manual.stopped", "stopped")
+        if len(failed) > 1:  # (several arms that did not stop: in English, joined)
+            return False, "; ".join(failed) + (f" ({', '.join(stopped)} stopped)" if stopped else "")
+        if stopped:
+            return False, say("manual.stop_partly", "{failed} ({arms} stopped)", failed=failed[0],
+                              arms=", ".join(stopped))
+        return False, failed[0]
 
     # ================================================================ jogging
     def jog(self, group: str, mode: str, axis: int, direction: int, speed: float, frame: str = "base",

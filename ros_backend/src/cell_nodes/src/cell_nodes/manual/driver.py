@@ -25,6 +25,7 @@ import time
 from dataclasses import dataclass, field, replace
 from typing import Callable, Optional, Sequence, TypeVar, cast
 
+from ..said import Said, say
 from . import frames
 from .config import DigitalOut, Group, ManualConfig, MoveNamedStep, UR_JOINTS, Wait, WaitInput
 from .controller import (RUNTIME_PLAYING, STATE_GETTERS, CallTimeout, ClientGone, Connector, ControlInterface, Gate,
@@ -50,7 +51,13 @@ AXES = ("x", "y", "z", "rx", "ry", "rz")
 
 
 class Refused(Exception):
-    """A command the driver does not carry out; the message says why (it goes back to the caller as is)."""
+    """A command the driver does not carry out; the message says why (it goes back to the caller as is), with its
+    code when it is a Said (cell_nodes.said)."""
+
+    @property
+    def said(self) -> Said:
+        text = self.args[0] if self.args else ""
+        return text if isinstance(text, Said) else Said(str(text))
 
 
 class MotionFault(Refused):
@@ -144,13 +151,35 @@ def _finite(values: Sequence[float]) -> bool:
 
 def _six(values: Sequence[float], what: str) -> None:
     """Refused unless `values` are 6 finite numbers (an offset or a pose); the message names what is wrong."""
-    form = f"{what} must be 6 numbers (x, y, z in m, rx, ry, rz in rad)"
     if len(values) != 6:
-        raise Refused(f"{form}, got {len(values)}")
+        raise Refused(say("manual.six_numbers_count", "{what} must be 6 numbers (x, y, z in m, rx, ry, rz in rad), "
+                          "got {count}", what=what, count=len(values)))
     for axis, v in zip(AXES, values):
         if not _finite([v]):
-            raise Refused(f"{form}, got {v!r} for {axis}")
+            raise Refused(say("manual.six_numbers_value", "{what} must be 6 numbers (x, y, z in m, rx, ry, rz in rad), "
+                              "got {value} for {axis}", what=what, value=repr(v), axis=axis))
 
+
+
+def the_target(kind: str) -> Said:
+    """"the relative target", "the pose target" (a move's target by its kind)."""
+    if kind == RELATIVE:
+        return say("manual.target_relative", "the relative target")
+    return say("manual.target_pose", "the pose target")
+
+
+def unknown_group(name: str, known: Sequence[str]) -> Said:
+    return say("manual.unknown_group", "unknown motion group '{group}' (the cell has: {known})", group=name,
+               known=", ".join(known) or "none")
+
+
+def unknown_tool(name: str, known: Sequence[str]) -> Said:
+    return say("manual.unknown_tool", "unknown tool '{tool}' (the cell has: {known})", tool=name,
+               known=", ".join(known) or "none")
+
+
+def unknown_frame(frame: str) -> Said:
+    return say("manual.unknown_frame", "unknown frame '{frame}' (base or tool)", frame=frame)
 
 class ManualDriver:
     def __init__(self, config: ManualConfig, host: str, connector: Connector, limits: Limits, *,
@@ -183,7 +212,7 @@ class ManualDriver:
         self._jog = JogSupervisor(limits.jog_timeout, clock)
         self._motion, self._group, self._target, self._progress = IDLE, "", "", 1.0
         self._token = 0                         # bumped by every new motion and by stop: ends a waiting call
-        self._end_reason = "stopped"
+        self._end_reason: str = say("manual.stopped", "stopped")
         self._sent: Optional[str] = None        # last motion command sent: "movej", "movel", "speedj", "speedl"
         self._message = ""
         self._fault = ""
@@ -239,7 +268,8 @@ class ManualDriver:
                 log.debug("connect to %s failed: %s", self.host, e)
                 # A backend that knows why (ros_control: no joint states, a URDF that does not load) says so.
                 why = getattr(e, "reason", "")
-                self._set_message(f"{self._unreachable()}: {why}" if why else self._unreachable())
+                self._set_message(say("manual.unreachable_why", "{unreachable}: {why}", unreachable=self._unreachable(),
+                                      why=why) if why else self._unreachable())
                 return False
             try:
                 io = cast(IOInterface, Guarded(
@@ -255,8 +285,10 @@ class ManualDriver:
                 self._levers.clear()
                 self._last_ts = (-1.0, self.clock())
                 self._connected = True
-                self._message = (f"reconnected to the robot controller at {self.host}" if self._was_connected
-                                 else f"connected to the robot controller at {self.host}")
+                self._message = (say("manual.reconnected", "reconnected to the robot controller at {host}",
+                                     host=self.host) if self._was_connected
+                                 else say("manual.connected", "connected to the robot controller at {host}",
+                                          host=self.host))
                 self._was_connected = True
             log.info(self._message)
         self._dispose_later(stale)
@@ -264,8 +296,8 @@ class ManualDriver:
         self.on_change()
         return True
 
-    def _unreachable(self) -> str:
-        return f"robot controller at {self.host} is unreachable"
+    def _unreachable(self) -> Said:
+        return say("manual.unreachable", "robot controller at {host} is unreachable", host=self.host)
 
     def _lose(self, why: str) -> None:
         """The controller is gone: forget the clients, end every motion, say so; the monitor reconnects."""
@@ -320,13 +352,14 @@ class ManualDriver:
                     raise Refused(self._unreachable())
                 if not take_over and self._snap.program_running and \
                         getattr(self._connector, "control_takes_over", True):
-                    raise Refused("another program runs on the robot controller: a preview does not take it over "
-                                  "(a move would stop it)")
+                    raise Refused(say("manual.preview_other_program", "another program runs on the robot controller: "
+                                      "a preview does not take it over (a move would stop it)"))
                 try:
                     ctl = cast(ControlInterface, Guarded(
                         run_with_timeout(lambda: self._connector.control(self.host), 10.0, "ur-control")))
                 except Exception as e:
-                    raise Refused(f"cannot start the control script on the robot controller at {self.host}: {e}")
+                    raise Refused(say("manual.script_cannot_start", "cannot start the control script on the robot "
+                                      "controller at {host}: {error}", host=self.host, error=e))
                 with self._cmd_lock:
                     if not self._connected:  # lost while the client was being made
                         self._dispose_later((ctl,))
@@ -340,13 +373,14 @@ class ManualDriver:
             if fresh or not self._call(ctl.isProgramRunning):
                 log.info("starting the control script" if fresh else "control script not running: uploading it again")
                 if not self._call(ctl.reuploadScript, timeout=5.0):
-                    raise Refused("the robot's control script could not be started (is the robot in remote "
-                                  "control?)")
+                    raise Refused(say("manual.script_not_started", "the robot's control script could not be started "
+                                      "(is the robot in remote control?)"))
                 # The controller compiles and starts it; a loaded host has taken 5.5 s.
                 deadline = self.clock() + SCRIPT_START_S
                 while not self._call(ctl.isProgramRunning):
                     if self.clock() > deadline:
-                        raise Refused("the robot's control script did not start (is the robot in remote control?)")
+                        raise Refused(say("manual.script_did_not_start", "the robot's control script did not start "
+                                          "(is the robot in remote control?)"))
                     self.sleep(POLL_S)
             if not self._offset_known:  # (read through the script: once it runs)
                 self._tcp_offset = list(self._call(ctl.getTCPOffset))
@@ -365,7 +399,8 @@ class ManualDriver:
         except Refused:
             raise
         except Exception as e:  # ur_rtde raises RuntimeError with its own text: answer it, do not crash the call
-            raise Refused(f"the robot controller reported an error: {e}") from None
+            raise Refused(say("manual.controller_error", "the robot controller reported an error: {error}",
+                              error=e)) from None
 
     # ================================================================ monitoring
     def _monitor_loop(self) -> None:
@@ -424,7 +459,7 @@ class ManualDriver:
                 changed = True
             if self._motion == JOGGING and not self._movable(snap):
                 self._jog.clear()  # the controller stopped the arm itself
-                self._set_idle(f"jog stopped: {self._not_movable_reason(snap)}")
+                self._set_idle(say("manual.jog_stopped_why", "jog stopped: {why}", why=self._not_movable_reason(snap)))
                 changed = True
             elif self._motion == STOPPING and snap.standstill():
                 self._set_idle(None)
@@ -486,20 +521,22 @@ class ManualDriver:
         return s.robot_mode == "RUNNING" and s.safety_mode in MOVABLE_SAFETY
 
     @staticmethod
-    def _not_movable_reason(s: Snapshot) -> str:
+    def _not_movable_reason(s: Snapshot) -> Said:
         if s.robot_mode == "CONTROLLER_NOT_RUNNING":
-            return "the arm's trajectory controller is not running (its action server does not answer)"
+            return say("manual.controller_not_running", "the arm's trajectory controller is not running (its action "
+                       "server does not answer)")
         if s.robot_mode in ("POWER_ON", "IDLE"):
-            return f"robot brakes are not released (mode {s.robot_mode})"
+            return say("manual.brakes_not_released", "robot brakes are not released (mode {mode})", mode=s.robot_mode)
         if s.robot_mode != "RUNNING":
-            return f"robot is not powered on (mode {s.robot_mode})"
+            return say("manual.not_powered", "robot is not powered on (mode {mode})", mode=s.robot_mode)
         if s.safety_mode == "PROTECTIVE_STOP":
-            return "protective stop is active: clear it first"
+            return say("manual.protective_stop", "protective stop is active: clear it first")
         if s.safety_mode in ("SAFEGUARD_STOP", "AUTOMATIC_MODE_SAFEGUARD_STOP"):
-            return "safeguard stop is active: close the guard first"
+            return say("manual.safeguard_stop", "safeguard stop is active: close the guard first")
         if "EMERGENCY" in s.safety_mode:
-            return f"emergency stop is active ({s.safety_mode}): release it first"
-        return f"robot cannot move in safety mode {s.safety_mode}"
+            return say("manual.emergency_stop", "emergency stop is active ({mode}): release it first",
+                       mode=s.safety_mode)
+        return say("manual.safety_mode", "robot cannot move in safety mode {mode}", mode=s.safety_mode)
 
     def _check_robot(self) -> Snapshot:
         """Refuse unless the controller answers, the arm is powered and no safety stop is active."""
@@ -526,15 +563,15 @@ class ManualDriver:
                 busy = self._motion != STOPPING or self.clock() > deadline
                 what = "jog " + self._target if self._motion == JOGGING else self._target or self._motion
                 if self._motion == JOGGING:  # any move request stops a jog (and is refused: nothing queues)
-                    self._stop_jog("jog stopped: a move was requested" if motion == MOVING
-                                   else "jog stopped: a tool action was requested")
+                    self._stop_jog(say("manual.jog_stopped_move", "jog stopped: a move was requested") if motion == MOVING
+                                   else say("manual.jog_stopped_tool", "jog stopped: a tool action was requested"))
             if busy:
-                raise Refused(f"another move is running ({what}): stop it first")
+                raise Refused(say("manual.busy", "another move is running ({what}): stop it first", what=what))
             self.sleep(POLL_S)  # a stop is settling: it ends within ~0.3 s
         self.on_change()
         return token
 
-    def _release(self, token: int, message: str) -> None:
+    def _release(self, token: int, message: str) -> None:  # (a Said keeps its code)
         with self._cmd_lock:
             if self._token == token:
                 self._set_idle(message)
@@ -545,7 +582,7 @@ class ManualDriver:
     def find_group(self, name: str) -> Group:
         g = self.config.groups.get(name)
         if g is None:
-            raise Refused(f"unknown motion group {name!r} (the cell has: {', '.join(self.config.groups) or 'none'})")
+            raise Refused(unknown_group(name, self.config.groups))
         return g
 
     # ================================================================ services
@@ -558,8 +595,9 @@ class ManualDriver:
             g = self.find_group(group)
             s = self._read()
         except Refused as e:
-            return False, str(e), [], []
-        return True, f"pose of {g.name}", [s.q[i] for i in g.indices], list(s.tcp_pose)
+            return False, e.said, [], []
+        return True, say("manual.pose_of", "pose of {group}", group=g.name), [s.q[i] for i in g.indices], \
+            list(s.tcp_pose)
 
     def move_named(self, group: str, name: str, speed: float = 0.0, acceleration: float = 0.0) -> tuple[bool, str]:
         return self._move(MoveRequest(NAMED, group, name=name), self.limits.joint_speed(speed),
@@ -581,13 +619,13 @@ class ManualDriver:
             g = self.check_request(request)
             token = self._claim(MOVING, g.name, request.label)
         except Refused as e:
-            return False, str(e)
+            return False, e.said
         try:
             target = self.move_target(request)
             run = self._linear_move if target.linear else self._joint_move
             return self._succeed(token, run(token, target, speed, acc))
         except Refused as e:
-            return self._fail(token, str(e))
+            return self._fail(token, e.said)
 
     def preview_move(self, group: str, kind: str, name: str = "", offset: Sequence[float] = (), frame: str = "",
                      pose: Sequence[float] = ()) -> tuple[bool, str, list[str], list[float], list[float]]:
@@ -599,9 +637,10 @@ class ManualDriver:
         try:
             target = self.move_target(request, take_over=False)
         except Refused as e:
-            return False, str(e), [], [], []
-        what = request.name if kind == NAMED else f"the {kind} target"
-        return True, f"{what} is reachable", list(self.joint_names), list(target.q), list(target.tcp_pose)
+            return False, e.said, [], [], []
+        what = request.name if kind == NAMED else the_target(kind)
+        return True, say("manual.reachable", "{what} is reachable", what=what), list(self.joint_names), \
+            list(target.q), list(target.tcp_pose)
 
     # ================================================================ targets
     def check_request(self, request: MoveRequest) -> Group:
@@ -609,16 +648,18 @@ class ManualDriver:
         g = self.find_group(request.group)
         if request.kind == NAMED:
             if request.name not in g.configurations:
-                raise Refused(f"unknown configuration {request.name!r} for group {g.name} "
-                              f"(it has: {', '.join(g.configurations) or 'none'})")
+                raise Refused(say("manual.unknown_configuration", "unknown configuration '{name}' for group {group} "
+                                  "(it has: {known})", name=request.name, group=g.name,
+                                  known=", ".join(g.configurations) or "none"))
         elif request.kind == RELATIVE:
-            _six(request.offset, "offset")
+            _six(request.offset, say("manual.offset", "offset"))
             if (request.frame or "base") not in FRAMES:
-                raise Refused(f"unknown frame {request.frame!r} (base or tool)")
+                raise Refused(unknown_frame(request.frame))
         elif request.kind == POSE:
-            _six(request.pose, "pose")
+            _six(request.pose, say("manual.pose", "pose"))
         else:
-            raise Refused(f"unknown move kind {request.kind!r} (named, relative or pose)")
+            raise Refused(say("manual.unknown_kind", "unknown move kind '{kind}' (named, relative or pose)",
+                              kind=request.kind))
         return g
 
     def move_target(self, request: MoveRequest, *, take_over: bool = True) -> MoveTarget:
@@ -643,22 +684,23 @@ class ManualDriver:
             q = list(start.q)
             for i, v in zip(g.indices, g.configurations[request.name]):
                 q[i] = v
-            self._check_joint_target(ctl, q, f"configuration {request.name}")
+            self._check_joint_target(ctl, q, say("manual.configuration", "configuration {name}", name=request.name))
             tcp = list(self._call(lambda: ctl.getForwardKinematics(q, list(self._tcp_offset))))
             return MoveTarget(g, request, start, tuple(q), tuple(tcp), linear=False)
         pose = (frames.relative_target(start.tcp_pose, request.offset, request.frame or "base")
                 if request.kind == RELATIVE else [float(v) for v in request.pose])
         # Check first: IK (or a moveL) to a pose without solution ends ur_rtde's control script with a runtime error.
         if not self._call(lambda: ctl.getInverseKinematicsHasSolution(pose, q_now, 1e-10, 1e-10), timeout=5.0):
-            raise Refused("pose unreachable: no inverse kinematics solution")
+            raise Refused(say("manual.no_ik", "pose unreachable: no inverse kinematics solution"))
         plan = getattr(ctl, "getLinearMoveTarget", None)
         if plan is not None:
             q = list(self._call(lambda: plan(pose, q_now), timeout=5.0))
         else:
             q = list(self._call(lambda: ctl.getInverseKinematics(pose, q_now, 1e-10, 1e-10), timeout=5.0))
         if len(q) != len(q_now) or not _finite(q):
-            raise Refused("pose unreachable: the controller gave no inverse kinematics solution")
-        self._check_joint_target(ctl, q, f"the {request.kind} target")
+            raise Refused(say("manual.no_ik_answer", "pose unreachable: the controller gave no inverse kinematics "
+                              "solution"))
+        self._check_joint_target(ctl, q, the_target(request.kind))
         return MoveTarget(g, request, start, tuple(q), tuple(pose), linear=True)
 
     def _check_joint_target(self, ctl: ControlInterface, q: list[float], what: str) -> None:
@@ -668,20 +710,22 @@ class ManualDriver:
             if why:
                 raise Refused(why)
         elif not self._call(lambda: ctl.isJointsWithinSafetyLimits(q)):
-            raise Refused(f"{what} is outside the robot's safety limits (joint limits, safety planes or reach)")
+            raise Refused(say("manual.outside_limits", "{what} is outside the robot's safety limits (joint limits, "
+                              "safety planes or reach)", what=what))
 
     def tool_action(self, tool: str, action: str) -> tuple[bool, str]:
         label = f"{tool} {action}"
         try:
             t = self.config.tools.get(tool)
             if t is None:
-                raise Refused(f"unknown tool {tool!r} (the cell has: {', '.join(self.config.tools) or 'none'})")
+                raise Refused(unknown_tool(tool, self.config.tools))
             a = t.actions.get(action)
             if a is None:
-                raise Refused(f"unknown action {action!r} for tool {tool} (it has: {', '.join(t.actions) or 'none'})")
+                raise Refused(say("manual.unknown_action", "unknown action '{action}' for tool {tool} (it has: {known})",
+                                  action=action, tool=tool, known=", ".join(t.actions) or "none"))
             token = self._claim(TOOL, "", label)
         except Refused as e:
-            return False, str(e)
+            return False, e.said
         try:
             n = len(a.steps)
             for i, step in enumerate(a.steps):
@@ -692,7 +736,8 @@ class ManualDriver:
                     if io is None:
                         raise Refused(self._unreachable())
                     if not self._call(lambda: io.setStandardDigitalOut(step.output, step.value)):
-                        raise Refused(f"{label}: the controller refused digital output {step.output}")
+                        raise Refused(say("manual.output_refused", "{label}: the controller refused digital output "
+                                          "{output}", label=label, output=step.output))
                 elif isinstance(step, Wait):
                     self._wait(token, step.seconds)
                 elif isinstance(step, WaitInput):
@@ -704,10 +749,11 @@ class ManualDriver:
                                          self.limits.default_speed, self.limits.default_acceleration)
                     except Refused as e:
                         self._check_token(token)
-                        raise Refused(f"{label}: {e}") from None
-            return self._succeed(token, f"{label} done")
+                        raise Refused(say("manual.tool_step_failed", "{label}: {why}", label=label,
+                                          why=e.said)) from None
+            return self._succeed(token, say("manual.tool_done", "{label} done", label=label))
         except Refused as e:
-            return self._fail(token, str(e))
+            return self._fail(token, e.said)
 
     def stop(self, wait: bool = True) -> tuple[bool, str]:
         """Stop any jog, move or tool action now; always allowed. Answers once the arm stands still (<= 1 s);
@@ -718,9 +764,9 @@ class ManualDriver:
             sent = self._sent
             if was != IDLE:
                 self._token += 1
-                self._end_reason = "stopped"
+                self._end_reason = say("manual.stopped", "stopped")
                 self._motion, self._progress = STOPPING, 1.0
-            self._message = "stopped"
+            self._message = say("manual.stopped", "stopped")
             if sent is not None:
                 log.info("stopped (%s)", self._target or sent)
             ctl = self._ctl
@@ -753,7 +799,7 @@ class ManualDriver:
             if not self._connected:
                 self._message = self._unreachable()
         self.on_change()
-        return (True, "stopped") if self._connected else (False, self._unreachable())
+        return (True, say("manual.stopped", "stopped")) if self._connected else (False, self._unreachable())
 
     def _stop_program(self) -> None:
         def run() -> None:
@@ -814,12 +860,15 @@ class ManualDriver:
             if bool(self._read().digital_in >> step.input & 1) == step.value:
                 return
             if self.clock() > end:
-                state = "on" if step.value else "off"
-                raise Refused(f"{label}: digital input {step.input} did not turn {state} within {step.timeout_s:g} s")
+                raise Refused(say("manual.input_timeout_on", "{label}: digital input {input} did not turn on within "
+                                  "{seconds} s", label=label, input=step.input, seconds=f"{step.timeout_s:g}")
+                              if step.value else
+                              say("manual.input_timeout_off", "{label}: digital input {input} did not turn off within "
+                                  "{seconds} s", label=label, input=step.input, seconds=f"{step.timeout_s:g}"))
             self.sleep(POLL_S)
 
     # ================================================================ moves
-    def _joint_move(self, token: int, t: MoveTarget, speed: float, acc: float) -> str:
+    def _joint_move(self, token: int, t: MoveTarget, speed: float, acc: float) -> Said:
         """Move to a named configuration's target (move_target); returns the success message, raises Refused."""
         ctl = self._ctl  # move_target made it
         if ctl is None:
@@ -837,12 +886,12 @@ class ManualDriver:
         with self._cmd_lock:
             self._check_token(token)
             if not self._call(lambda: ctl.moveJ(target, speed, acc, True)):
-                raise Refused(f"the controller refused the move to {name}")
+                raise Refused(say("manual.move_refused", "the controller refused the move to {name}", name=name))
             self._sent = "movej"
         self._await(token, progress, arrived, lead / speed + speed / acc)
-        return f"arrived at {name}"
+        return say("manual.arrived_at", "arrived at {name}", name=name)
 
-    def _linear_move(self, token: int, t: MoveTarget, speed: float, acc: float) -> str:
+    def _linear_move(self, token: int, t: MoveTarget, speed: float, acc: float) -> Said:
         """A straight TCP line to the target's pose (move_target checked its IK); returns the success message,
         raises Refused."""
         ctl = self._ctl  # move_target made it
@@ -863,10 +912,12 @@ class ManualDriver:
         with self._cmd_lock:
             self._check_token(token)
             if not self._call(lambda: ctl.moveL(pose, speed, acc, True)):
-                raise Refused(f"the controller refused the {label} move")
+                raise Refused(say("manual.linear_refused_relative", "the controller refused the relative move")
+                              if label == RELATIVE else
+                              say("manual.linear_refused_pose", "the controller refused the pose move"))
             self._sent = "movel"
         self._await(token, progress, arrived, length / speed + speed / acc)
-        return f"arrived at the {label} target"
+        return say("manual.arrived_at_target", "arrived at {target}", target=the_target(label))
 
     def _await(self, token: int, progress: Callable[[Snapshot], float], arrived: Callable[[Snapshot], bool],
                expected_s: float) -> None:
@@ -884,7 +935,7 @@ class ManualDriver:
             self._check_token(token)
             s = self._read()
             if not self._movable(s):
-                raise Refused(f"move aborted: {self._not_movable_reason(s)}")
+                raise Refused(say("manual.move_aborted", "move aborted: {why}", why=self._not_movable_reason(s)))
             running = self._call(ctl.getAsyncOperationProgress) >= 0
             error = self._call(ctl.getMoveError) if hasattr(ctl, "getMoveError") else ""
             if error:
@@ -902,12 +953,14 @@ class ManualDriver:
                     return
                 done_at = done_at or now
                 if not s.program_running:
-                    raise Refused("the controller stopped the move (its control script ended)")
+                    raise Refused(say("manual.script_ended", "the controller stopped the move (its control script "
+                                      "ended)"))
                 if now - done_at > 1.5:
-                    raise Refused("the move ended away from its target")
+                    raise Refused(say("manual.ended_away", "the move ended away from its target"))
             if now > limit:
                 self.stop(wait=False)
-                raise Refused(f"the move did not finish within {limit - t0:.0f} s")
+                raise Refused(say("manual.move_timeout", "the move did not finish within {seconds} s",
+                                  seconds=f"{limit - t0:.0f}"))
             self.sleep(POLL_S)
 
     # ================================================================ jogging
@@ -919,29 +972,32 @@ class ManualDriver:
         one: jog.py)."""
         cmd = Jog(group, mode, int(axis), int(max(-1, min(1, direction))), float(speed), frame or "base", int(press))
         if cmd.direction == 0:
-            self._stop_jog("jog stopped", released=True)
+            self._stop_jog(say("manual.jog_stopped", "jog stopped"), released=True)
             return
         if age_s is not None and age_s > self._jog.timeout:
             # A late heartbeat (a stalled link or node delivering a backlog): it neither restarts motion the watchdog
             # stopped nor keeps a jog alive, nor moves the arm for a session that lost control since it was sent.
-            self._set_message(f"jog ignored: it arrived {age_s:.2f} s after it was sent (more than the jog timeout, "
-                              f"{self._jog.timeout:.2f} s)")
+            self._set_message(say("manual.jog_late", "jog ignored: it arrived {age} s after it was sent (more than the "
+                                  "jog timeout, {timeout} s)", age=f"{age_s:.2f}", timeout=f"{self._jog.timeout:.2f}"))
             self._note(cmd, "ignored: it came late")
             return
         try:
             g = self.find_group(group)
             if mode not in (JOINT, CARTESIAN):
-                raise Refused(f"unknown jog mode {mode!r} (joint or cartesian)")
+                raise Refused(say("manual.unknown_jog_mode", "unknown jog mode '{mode}' (joint or cartesian)", mode=mode))
             if mode == JOINT and not 0 <= cmd.axis < len(g.joints):
-                raise Refused(f"group {g.name} has no joint {cmd.axis + 1}")
+                raise Refused(say("manual.no_joint", "group {group} has no joint {joint}", group=g.name,
+                                  joint=cmd.axis + 1))
             if mode == CARTESIAN and not 0 <= cmd.axis < 6:
-                raise Refused(f"unknown Cartesian axis {cmd.axis} (0..5 = X, Y, Z, RX, RY, RZ)")
+                raise Refused(say("manual.unknown_axis", "unknown Cartesian axis {axis} (0..5 = X, Y, Z, RX, RY, RZ)",
+                                  axis=cmd.axis))
             if mode == CARTESIAN and cmd.frame not in FRAMES:
-                raise Refused(f"unknown frame {cmd.frame!r} (base or tool)")
+                raise Refused(unknown_frame(cmd.frame))
             if self.limits.jog_fraction(cmd.speed) is None:
-                raise Refused("jog speed must be above 0")
+                raise Refused(say("manual.jog_speed_zero", "jog speed must be above 0"))
             if self._motion in (MOVING, TOOL):
-                self._set_message(f"jog ignored: a move is running ({self._target})")
+                self._set_message(say("manual.jog_ignored_busy", "jog ignored: a move is running ({target})",
+                                      target=self._target))
                 return
             self._check_robot()
             if cmd.same_motion(self._jog.stopped):
@@ -950,7 +1006,7 @@ class ManualDriver:
             if self._jog.active is None or not cmd.same_motion(self._jog.active):
                 self._control()  # may upload the control script: not while holding the command lock
         except Refused as e:
-            self.refuse_jog(str(e))
+            self.refuse_jog(e.said)
             return
         with self._cmd_lock:
             if self._motion in (MOVING, TOOL):
@@ -965,7 +1021,7 @@ class ManualDriver:
                 log.info("jogging %s at %.0f %% (press %d)", cmd.label(), cmd.speed * 100, cmd.press)
             except Refused as e:
                 self._jog.clear(hold=False)  # it never moved: the press's next heartbeat tries again
-                self._set_idle(f"jog refused: {e}")
+                self._set_idle(say("manual.jog_refused", "jog refused: {why}", why=e.said))
         self.on_change()
 
     def _note(self, cmd: Jog, what: str) -> None:
@@ -978,9 +1034,9 @@ class ManualDriver:
         """A JogCommand that cannot be carried out: a running jog stops (never carry on after a bad or refused
         command), and the state's message says why. The cell driver also calls it for a group no arm has."""
         if self._jog.active is not None:
-            self._stop_jog(f"jog refused: {why}")
+            self._stop_jog(say("manual.jog_refused", "jog refused: {why}", why=why))
         else:
-            self._set_message(f"jog refused: {why}")
+            self._set_message(say("manual.jog_refused", "jog refused: {why}", why=why))
 
     def _start_jog(self, cmd: Jog, g: Group) -> None:
         """Caller holds _cmd_lock. Sends the new speed at once: it replaces the running jog's."""
@@ -995,7 +1051,7 @@ class ManualDriver:
             if self._sent == "speedl":  # switching speed modes: stop the other first (no blending of the two)
                 self._call(lambda: ctl.speedStop(STOP_DECEL_TCP))
             if not self._call(lambda: ctl.speedJ(qd, self.limits.max_acceleration, 0.0)):
-                raise Refused("the controller refused the joint jog")
+                raise Refused(say("manual.joint_jog_refused", "the controller refused the joint jog"))
             self._sent = "speedj"
         else:
             twist = [0.0] * 6
@@ -1004,12 +1060,12 @@ class ManualDriver:
             if self._sent == "speedj":
                 self._call(lambda: ctl.speedStop(STOP_DECEL_JOINT))
             if not self._call(lambda: ctl.speedL(xd, self.limits.cartesian_jog_acceleration(cmd.axis), 0.0)):
-                raise Refused("the controller refused the Cartesian jog")
+                raise Refused(say("manual.cartesian_jog_refused", "the controller refused the Cartesian jog"))
             self._sent = "speedl"
         self._token += 1
         self._fault = ""
         self._motion, self._group, self._target, self._progress = JOGGING, g.name, cmd.label(), 1.0
-        self._message = f"jogging {cmd.label()}"
+        self._message = say("manual.jogging", "jogging {jog}", jog=cmd.label())
 
     def _lever(self, ctl: ControlInterface, q: Sequence[float], joint: int) -> float:
         """TCP metres per radian of `joint` here (controller FK). Only the joints after it change that distance (the
@@ -1045,5 +1101,6 @@ class ManualDriver:
         with self._cmd_lock:  # re-entrant: a heartbeat cannot slip in between the check and the stop
             if not self._jog.expired():
                 return False
-            self._stop_jog(f"jog stopped: no heartbeat for {self.limits.jog_timeout:g} s", hard=True, hold=False)
+            self._stop_jog(say("manual.jog_no_heartbeat", "jog stopped: no heartbeat for {seconds} s",
+                               seconds=f"{self.limits.jog_timeout:g}"), hard=True, hold=False)
         return True

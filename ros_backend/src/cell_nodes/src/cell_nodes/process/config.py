@@ -187,7 +187,13 @@ def _shown(value: Any, where: str) -> str:
 
 
 def _text(raw: Mapping[str, Any], where: str, key: str = "text") -> str:
+    """A step's `text` or `note`: a string, or one per language ({en: ..., es: ...}); the node keeps the English (the
+    app says the others: the BFF gives it the cell file's texts)."""
     value = raw.get(key, "")
+    if isinstance(value, dict):
+        value = english(value)
+        if not isinstance(value, str) or not value.strip():
+            raise ConfigError(f"{where}.{key}.en: expected a text, got {value!r}")
     if not isinstance(value, str):
         raise ConfigError(f"{where}.{key}: expected a text, got {value!r}")
     return value.strip()

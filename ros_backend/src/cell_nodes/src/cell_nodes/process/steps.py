@@ -34,8 +34,8 @@ def describe(step: Step, cycle: int, poses: Mapping[str, Sequence[Sequence[float
     """The step's text: its own `text` if the cell file gives one ({n}: the pose-table entry's number); else what it
     does, said with a code (cell_nodes.said) so the app says it in the user's language."""
     n = table_index(cycle, len(poses[step.table])) + 1 if isinstance(step, MovePose) and step.table else 0
-    if step.text:
-        return step.text.replace("{n}", str(n)) if n else step.text
+    if step.text:  # (said with a code, so the app can say it in the cell file's text of the user's language)
+        return say("process.step_text", "{text}", text=step.text.replace("{n}", str(n)) if n else step.text)
     note_text = getattr(step, "note", "")
     note: object = say("process.step_note", " ({note})", note=note_text) if note_text else ""
     if isinstance(step, MoveNamed):

@@ -10,12 +10,14 @@ from .config import RoutinesConfig
 from .log import LogBook
 from .model import (ACTION, POSE, Routine, RoutineError, Step, check_group, check_name, check_tool_action,
                     checked, format_pose, runnable_problem)
-from .runner import Robot, Runner
+from ..said import Said, say
+from .runner import Robot, Runner, busy, driver_failed, steps_text
 from .store import RoutineStore
 
 
-def _steps_text(n: int) -> str:
-    return f"{n} step{'s' if n != 1 else ''}"
+def _said(e: Exception) -> Said:
+    """A refusal's text, with its code when it was said with one."""
+    return e.args[0] if e.args and isinstance(e.args[0], Said) else Said(str(e))
 
 
 def _title(word: str) -> str:
@@ -41,7 +43,8 @@ class Routines:
                 return False, str(e), []
         out = [r if r.error else Routine(r.name, r.group, r.tool, r.steps, r.modified,
                                          runnable_problem(self.config, r)) for r in routines]
-        return True, f"{len(out)} routine{'s' if len(out) != 1 else ''}", out
+        return True, (say("routines.count_one", "{count} routine", count=len(out)) if len(out) == 1 else
+                      say("routines.count", "{count} routines", count=len(out))), out
 
     # ---------------------------------------------------------------- record
     def record(self, group: str, tool: str, kind: str, action: str) -> tuple[bool, str, Optional[Step]]:
@@ -51,23 +54,23 @@ class Routines:
                 check_group(self.config, group)
                 ok, why, joints, tcp = self.robot.get_pose(group)
                 if not ok:
-                    raise RoutineError(f"cannot read the pose: {why}")
+                    raise RoutineError(say("routines.no_pose", "cannot read the pose: {why}", why=why))
                 if len(tcp) != 6 or not all(math.isfinite(v) for v in tcp):
                     raise RoutineError("the robot driver answered no TCP pose")
                 step = Step(POSE, tuple(float(v) for v in tcp), tuple(float(v) for v in joints))
-                text = f"Pose recorded: {format_pose(step.pose)}"
+                text = say("routines.pose_recorded", "Pose recorded: {pose}", pose=format_pose(step.pose))
             elif kind == ACTION:
                 if group:
                     check_group(self.config, group)
                 check_tool_action(self.config, tool, action, group)
                 step = Step(ACTION, tool=tool, action=action)
-                text = f"{_title(tool)} {action} recorded"
+                text = say("routines.action_recorded", "{tool} {action} recorded", tool=_title(tool), action=action)
             else:
                 raise RoutineError(f"unknown step kind {kind!r} (pose or action)")
         except RoutineError as e:
-            return False, str(e), None
+            return False, _said(e), None
         except Exception as e:  # the robot interface should answer, not raise
-            return False, f"cannot read the pose: the robot driver call failed: {e}", None
+            return False, say("routines.no_pose", "cannot read the pose: {why}", why=driver_failed(e)), None
         self.log.info(text)
         return True, text, step
 
@@ -77,13 +80,16 @@ class Routines:
             routine = checked(self.config, name, group, tool, steps)
             with self._files:
                 if overwrite and self.runner.running() == name:
-                    raise RoutineError(f"routine {name} is running: stop it first")
+                    raise RoutineError(busy(name))
                 replaced = self.store.save(routine, overwrite)
         except RoutineError as e:
-            return False, str(e)
-        what = "replaced" if replaced else "saved"
-        self.log.info(f"Routine {name} {what} ({_steps_text(len(routine.steps))})")
-        return True, f"routine {name} {what} ({_steps_text(len(routine.steps))})"
+            return False, _said(e)
+        steps = steps_text(len(routine.steps))
+        if replaced:
+            self.log.info(say("routines.replaced_log", "Routine {name} replaced ({steps})", name=name, steps=steps))
+            return True, say("routines.replaced", "routine {name} replaced ({steps})", name=name, steps=steps)
+        self.log.info(say("routines.saved_log", "Routine {name} saved ({steps})", name=name, steps=steps))
+        return True, say("routines.saved", "routine {name} saved ({steps})", name=name, steps=steps)
 
     def rename(self, name: str, new_name: str) -> tuple[bool, str]:
         try:
@@ -91,24 +97,24 @@ class Routines:
             check_name(new_name)
             with self._files:
                 if self.runner.running() == name:
-                    raise RoutineError(f"routine {name} is running: stop it first")
+                    raise RoutineError(busy(name))
                 self.store.rename(name, new_name)
         except RoutineError as e:
-            return False, str(e)
-        self.log.info(f"Routine {name} renamed to {new_name}")
-        return True, f"routine {name} renamed to {new_name}"
+            return False, _said(e)
+        self.log.info(say("routines.renamed_log", "Routine {name} renamed to {new_name}", name=name, new_name=new_name))
+        return True, say("routines.renamed", "routine {name} renamed to {new_name}", name=name, new_name=new_name)
 
     def delete(self, name: str) -> tuple[bool, str]:
         try:
             check_name(name)
             with self._files:
                 if self.runner.running() == name:
-                    raise RoutineError(f"routine {name} is running: stop it first")
+                    raise RoutineError(busy(name))
                 self.store.delete(name)
         except RoutineError as e:
-            return False, str(e)
-        self.log.info(f"Routine {name} deleted")
-        return True, f"routine {name} deleted"
+            return False, _said(e)
+        self.log.info(say("routines.deleted_log", "Routine {name} deleted", name=name))
+        return True, say("routines.deleted", "routine {name} deleted", name=name)
 
     # ---------------------------------------------------------------- run
     def run(self, name: str) -> tuple[bool, str]:
@@ -118,13 +124,14 @@ class Routines:
             with self._files:
                 routine = self.store.read(name)
             if routine.error:
-                raise RoutineError(f"routine {name} cannot run: {routine.error}")
+                raise RoutineError(say("routines.cannot_run", "routine {name} cannot run: {error}", name=name,
+                                       error=routine.error))
             problem = runnable_problem(self.config, routine)
             if problem:
                 raise RoutineError(f"routine {name} {problem}")
         except RoutineError as e:
-            self.log.warning(f"Run refused: {e}")
-            return False, str(e)
+            self.log.warning(say("routines.run_refused", "Run refused: {why}", why=_said(e)))
+            return False, _said(e)
         return self.runner.run(routine)
 
     def stop(self) -> tuple[bool, str]:

@@ -8,6 +8,7 @@ import re
 from dataclasses import dataclass, field
 from typing import Any, Optional, Sequence
 
+from ..said import Said, say
 from .config import RoutinesConfig
 
 POSE, ACTION = "pose", "action"
@@ -77,19 +78,20 @@ def _finite(values: Sequence[Any]) -> bool:
     return all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values)
 
 
-def format_pose(pose: Sequence[float]) -> str:
+def format_pose(pose: Sequence[float]) -> Said:
     """`x 412.3, y -120.0, z 230.5 mm, rx 3.142, ry 0.000, rz 0.000 rad` (+ 0.0: no "-0.0")."""
     x, y, z, rx, ry, rz = (float(v) + 0.0 for v in pose)
-    return (f"x {x * 1000 + 0.0:.1f}, y {y * 1000 + 0.0:.1f}, z {z * 1000 + 0.0:.1f} mm, "
-            f"rx {round(rx, 3) + 0.0:.3f}, ry {round(ry, 3) + 0.0:.3f}, rz {round(rz, 3) + 0.0:.3f} rad")
+    return say("routines.pose_full", "x {x}, y {y}, z {z} mm, rx {rx}, ry {ry}, rz {rz} rad",
+               x=f"{x * 1000 + 0.0:.1f}", y=f"{y * 1000 + 0.0:.1f}", z=f"{z * 1000 + 0.0:.1f}",
+               rx=f"{round(rx, 3) + 0.0:.3f}", ry=f"{round(ry, 3) + 0.0:.3f}", rz=f"{round(rz, 3) + 0.0:.3f}")
 
 
-def describe(step: Step) -> str:
+def describe(step: Step) -> Said:
     """A step for the log and the run state: `pose x 412.3, y -120.0, z 230.5 mm` or `gripper close`."""
     if step.kind == POSE:
         x, y, z = (float(v) * 1000 + 0.0 for v in step.pose[:3])
-        return f"pose x {x:.1f}, y {y:.1f}, z {z:.1f} mm"
-    return f"{step.tool} {step.action}"
+        return say("routines.step_pose", "pose x {x}, y {y}, z {z} mm", x=f"{x:.1f}", y=f"{y:.1f}", z=f"{z:.1f}")
+    return say("routines.step_action", "{tool} {action}", tool=step.tool, action=step.action)
 
 
 def check_group(config: RoutinesConfig, group: str) -> None:

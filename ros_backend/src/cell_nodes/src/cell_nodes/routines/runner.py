@@ -10,6 +10,7 @@ import time
 from dataclasses import dataclass, replace
 from typing import Callable, Protocol, Sequence
 
+from ..said import Said, say
 from .log import LogBook
 from .model import POSE, Routine, Step, describe
 
@@ -17,6 +18,23 @@ IDLE, RUNNING, STOPPING = "idle", "running", "stopping"
 STOPPED = "stopped"
 STOP_RETRY_S = 0.5      # stop again when the run has not ended this long after the driver's stop
 STOP_GIVE_UP_S = 3.0
+
+
+def busy(name: str) -> Said:
+    return say("routines.busy", "routine {name} is running: stop it first", name=name)
+
+
+def stopped(name: str) -> Said:
+    return say("routines.stopped", "routine {name} stopped", name=name)
+
+
+def driver_failed(e: object) -> Said:
+    return say("routines.driver_failed", "the robot driver call failed: {error}", error=e)
+
+
+def steps_text(n: int) -> Said:
+    return (say("routines.steps_one", "{count} step", count=n) if n == 1 else
+            say("routines.steps", "{count} steps", count=n))
 
 
 class Robot(Protocol):
@@ -73,14 +91,16 @@ class Runner:
         name, steps, total = routine.name, routine.steps, len(routine.steps)
         with self._lock:
             if self._state.state != IDLE:
-                why = f"routine {self._state.name} is running: stop it first"
-                self.log.warning(f"Run refused: {why}")
+                why = busy(self._state.name)
+                self.log.warning(say("routines.run_refused", "Run refused: {why}", why=why))
                 return False, why
             self._stop_requested = False
             self._ended.clear()
-            self._set(name=name, state=RUNNING, step=0, total=total, message=f"routine {name} started")
-            self.log.info(f"Routine {name} started ({total} step{'s' if total != 1 else ''}, group {routine.group})")
-        ok, message = True, f"routine {name} done"
+            self._set(name=name, state=RUNNING, step=0, total=total,
+                      message=say("routines.started", "routine {name} started", name=name))
+            self.log.info(say("routines.started_log", "Routine {name} started ({steps}, group {group})", name=name,
+                              steps=steps_text(total), group=routine.group))
+        ok, message = True, say("routines.done", "routine {name} done", name=name)
         try:
             for i, step in enumerate(steps, 1):
                 with self._lock:
@@ -88,27 +108,33 @@ class Runner:
                     if self._stop_requested:
                         ok, message = False, STOPPED
                         break
-                    self._set(step=i, message=f"step {i} of {total}: {describe(step)}")
+                    self._set(step=i, message=say("routines.step", "step {step} of {total}: {what}", step=i,
+                                                  total=total, what=describe(step)))
                 done, why = self._do(routine, step)
                 if self._stop_requested or (not done and why == STOPPED):
                     # Ours, or the driver was stopped by someone else (the page's "Stop robot"): the run is over.
                     ok, message = False, STOPPED
                     break
                 if not done:
-                    ok, message = False, f"step {i} of {total} ({describe(step)}) failed: {why}"
+                    ok, message = False, say("routines.step_failed", "step {step} of {total} ({what}) failed: {why}",
+                                             step=i, total=total, what=describe(step), why=why)
                     break
-                self.log.info(f"Step {i} of {total} {'reached' if step.kind == POSE else 'done'}: {describe(step)}")
+                self.log.info(say("routines.step_reached", "Step {step} of {total} reached: {what}", step=i,
+                                  total=total, what=describe(step)) if step.kind == POSE else
+                              say("routines.step_done", "Step {step} of {total} done: {what}", step=i, total=total,
+                                  what=describe(step)))
         except Exception as e:  # never leave the runner "running" behind an unexpected error
-            ok, message = False, f"routine {name} failed: {e}"
+            ok, message = False, say("routines.failed", "routine {name} failed: {error}", name=name, error=e)
         with self._lock:
             step = self._state.step
             if ok:
-                self.log.info(f"Routine {name} done")
+                self.log.info(say("routines.done_log", "Routine {name} done", name=name))
             elif message == STOPPED:
-                self.log.warning(f"Routine {name} stopped at step {step} of {total}")
+                self.log.warning(say("routines.stopped_at", "Routine {name} stopped at step {step} of {total}",
+                                     name=name, step=step, total=total))
             else:
-                self.log.error(f"Routine {name} failed: {message}")
-            self._set(state=IDLE, step=0, message=message if message != STOPPED else f"routine {name} stopped")
+                self.log.error(say("routines.failed_log", "Routine {name} failed: {why}", name=name, why=message))
+            self._set(state=IDLE, step=0, message=message if message != STOPPED else stopped(name))
             self._ended.set()
         return ok, message
 
@@ -118,17 +144,17 @@ class Runner:
                 return self.robot.move_pose(routine.group, list(step.pose), self.speed, self.acceleration)
             return self.robot.tool(step.tool or routine.tool, step.action)
         except Exception as e:  # the robot interface should answer, not raise; a failed call fails the step
-            return False, f"the robot driver call failed: {e}"
+            return False, driver_failed(e)
 
     # ---------------------------------------------------------------- stop
     def stop(self) -> tuple[bool, str]:
         """End the run now: no further step, and the driver stops the one under way. Answers once the run ended."""
         with self._lock:
             if self._state.state == IDLE:
-                return True, "no routine is running"
+                return True, say("routines.none_running", "no routine is running")
             self._stop_requested = True
             name, total = self._state.name, self._state.total
-            self._set(state=STOPPING, message=f"stopping routine {name}")
+            self._set(state=STOPPING, message=say("routines.stopping", "stopping routine {name}", name=name))
         deadline = self.clock() + STOP_GIVE_UP_S
         robot_ok, robot_why = True, ""
         while True:
@@ -137,11 +163,13 @@ class Runner:
             try:
                 robot_ok, robot_why = self.robot.stop()
             except Exception as e:
-                robot_ok, robot_why = False, f"the robot driver call failed: {e}"
+                robot_ok, robot_why = False, driver_failed(e)
             if self._ended.wait(STOP_RETRY_S) or self.clock() > deadline:
                 break
         if not self._ended.is_set():
-            return False, f"routine {name} did not end within {STOP_GIVE_UP_S:g} s of the stop: {robot_why}"
+            return False, say("routines.stop_timeout", "routine {name} did not end within {seconds} s of the stop: "
+                              "{why}", name=name, seconds=f"{STOP_GIVE_UP_S:g}", why=robot_why)
         if not robot_ok:
-            return False, f"routine {name} stopped; the robot driver did not confirm: {robot_why}"
-        return True, f"routine {name} stopped"
+            return False, say("routines.stop_unconfirmed", "routine {name} stopped; the robot driver did not confirm: "
+                              "{why}", name=name, why=robot_why)
+        return True, stopped(name)

@@ -25,6 +25,7 @@ from typing import Callable, Optional, Protocol, Sequence
 
 from ..config import RosControlSpec
 from ..controller import CONTROLLER_NOT_RUNNING, RUNTIME_PLAYING
+from ...said import Said, say
 from ..driver import Refused
 from . import trajectory
 from .kinematics import Kinematics, KinematicsError
@@ -224,15 +225,17 @@ class RosControlArm:
             raise Refused(str(e))
         return self._from_kin([float(v) for v in path.qs[-1]])
 
-    def getJointLimitError(self, q: list[float]) -> str:
+    def getJointLimitError(self, q: list[float]) -> Said:
         """Why moveJ would refuse the joint target `q` (the URDF's position limits), "" when it would not."""
         if len(q) != len(self.joints):
-            return f"a joint target needs {len(self.joints)} values, got {len(q)}"
+            return say("manual.joint_target_count", "a joint target needs {needed} values, got {count}",
+                       needed=len(self.joints), count=len(q))
         qk = self._kin_q(q)
         for name, v, lo, hi in zip(self.kin.joint_names, qk, self.kin.lower, self.kin.upper):
             if not lo - 1e-9 <= v <= hi + 1e-9:
-                return f"joint {name}: target {v:.3f} rad is outside its limits [{lo:.3f}, {hi:.3f}] rad"
-        return ""
+                return say("manual.joint_outside_limits", "joint {joint}: target {target} rad is outside its limits "
+                           "[{lower}, {upper}] rad", joint=name, target=f"{v:.3f}", lower=f"{lo:.3f}", upper=f"{hi:.3f}")
+        return Said("")
 
     # ------------------------------------------------------------------ moves
     def _check_limits(self, target: Sequence[float]) -> None:
@@ -259,7 +262,8 @@ class RosControlArm:
 
     def _send(self, points: Sequence[trajectory.TrajectoryPoint]) -> bool:
         if not self.transport.controller_ready():
-            raise Refused(f"the trajectory controller {self.spec.controller} is not running")
+            raise Refused(say("manual.trajectory_controller_down", "the trajectory controller {controller} is not "
+                              "running", controller=self.spec.controller))
         self._end_stream()
         with self._lock:
             self._goal_seq += 1
@@ -313,7 +317,8 @@ class RosControlArm:
         a jog that jumped to full speed would make the controller's spline overshoot it (measured: the TCP at
         1.2x the commanded speed), and the 250 mm/s cap is on the actual speed."""
         if not self.transport.controller_ready():
-            raise Refused(f"the trajectory controller {self.spec.controller} is not running")
+            raise Refused(say("manual.trajectory_controller_down", "the trajectory controller {controller} is not "
+                              "running", controller=self.spec.controller))
         with self._lock:
             if self._goal_active:
                 self._goal_seq += 1  # its PREEMPTED result is ours, not a fault
@@ -355,7 +360,8 @@ class RosControlArm:
     # ------------------------------------------------------------------ IO
     def setStandardDigitalOut(self, output_id: int, signal_level: bool) -> bool:
         if output_id not in self.spec.outputs:
-            raise Refused(f"digital output {output_id} is not wired (manual.groups[].ros_control.io.outputs)")
+            raise Refused(say("manual.output_not_wired", "digital output {output} is not wired "
+                              "(manual.groups[].ros_control.io.outputs)", output=output_id))
         self.transport.set_output(output_id, bool(signal_level))
         with self._lock:
             self._outputs = (self._outputs | 1 << output_id) if signal_level else (self._outputs & ~(1 << output_id))

@@ -25,6 +25,7 @@ from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from ...said import say
 from ..config import RosControlSpec
 from ..driver import Refused
 from . import trajectory
@@ -109,9 +110,11 @@ class RosTransport:
             proxy.wait_for_service(SERVICE_TIMEOUT)
             answer = proxy(value)
         except (rospy.ROSException, rospy.ServiceException) as e:
-            raise Refused(f"digital output {output}: the service {name} does not answer ({e})")
+            raise Refused(say("manual.output_no_answer", "digital output {output}: the service {service} does not "
+                              "answer ({error})", output=output, service=name, error=e))
         if not answer.success:
-            raise Refused(f"digital output {output}: {name} refused: {answer.message or 'no reason given'}")
+            raise Refused(say("manual.output_refused_by", "digital output {output}: {service} refused: {why}",
+                              output=output, service=name, why=answer.message or "no reason given"))
 
     def inputs(self) -> dict[int, bool]:
         return dict(self._inputs)
