@@ -11,7 +11,6 @@ import logging
 import queue
 import threading
 import time
-from collections import deque
 from dataclasses import dataclass, field
 from typing import Optional
 
@@ -25,7 +24,6 @@ from .trajectory import Defaults, GoalEvent, TrajectoryController
 from .world import IiwaArm, IiwaWorld
 
 MAX_CATCH_UP_S = 0.1   # sim seconds a stalled loop catches up (50 cycles at 500 Hz); a longer stall is lost
-QD_WINDOW = 10         # ticks (20 ms) over which the published joint speeds are taken, as sim/controller.py does
 
 log = logging.getLogger("sim.ros_control")
 
@@ -68,7 +66,6 @@ class ArmRuntime:
         self.ctl.hold(0.0, spec.start_joints)
         q, qd, effort, ft = body.read()
         self.snapshot = Snapshot(0.0, q, qd, effort, ft)
-        self.q_window: deque[np.ndarray] = deque([q], maxlen=QD_WINDOW + 1)
         self.events: "queue.Queue[GoalEvent]" = queue.Queue()  # goals the loop ended, for the driver's results
 
 
@@ -105,11 +102,7 @@ class RosControlCell:
             q_des, qd_des, events = rt.ctl.update(t, q, qd)
             rt.body.command_arm(q_des, qd_des)
             rt.body.tick_tool()
-            # Published: the change of position over QD_WINDOW ticks, as encoders give it (PyBullet's own velocity
-            # state can read 0.0105 rad/s with the joints still, see sim/controller.py after_step).
-            rt.q_window.append(q)
-            qd_seen = (q - rt.q_window[0]) / (DT * max(len(rt.q_window) - 1, 1))
-            rt.snapshot = Snapshot(t, q, qd_seen, effort, ft, rt.body.held is not None)
+            rt.snapshot = Snapshot(t, q, qd, effort, ft, rt.body.held is not None)
             for ev in events:
                 rt.events.put(ev)
         self.world.step()
