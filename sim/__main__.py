@@ -146,9 +146,25 @@ def main(argv: Optional[list[str]] = None) -> int:
                                   ", ".join(sorted(set((opts.hosts or {}).values()))) or opts.host, opts.speed)
     while not done.wait(0.2):
         pass
+    # A stop is bounded, as a controller's power-off is: CI once saw this process take 10 s to exit on SIGTERM (a
+    # thread that never ended). Past STOP_DEADLINE_S the threads still alive are logged, then the process exits.
+    deadline = threading.Timer(STOP_DEADLINE_S, _exit_stuck)
+    deadline.daemon = True
+    deadline.start()
     cell.stop()
     logging.getLogger("sim").info("stopped")
     return 0
+
+
+STOP_DEADLINE_S = 1.8   # the tests expect an exit within 2 s of SIGTERM
+
+
+def _exit_stuck() -> None:
+    alive = [t.name for t in threading.enumerate() if t is not threading.current_thread() and t.is_alive()]
+    logging.getLogger("sim").error("stop took over %.1f s; still running: %s; exiting", STOP_DEADLINE_S,
+                                   ", ".join(alive) or "none")
+    logging.shutdown()
+    os._exit(1)
 
 
 if __name__ == "__main__":
