@@ -1,5 +1,5 @@
 // The third cell (config/iiwa-cell.yaml: a KUKA LBR iiwa driven through the standard ROS interfaces of its own
-// driver, ros_control, simulated) through the same code: its own stack on its own ports, on the same three profiles.
+// driver, ros_control, simulated) through the same code: its own stack on its own ports, on the phone profile (the demo cell's run covers the other layouts).
 // `npm test -w e2e` runs the demo cell's config, the twin cell's, then this.
 import { defineConfig } from '@playwright/test';
 import base from './playwright.config.js';
@@ -11,4 +11,5 @@ export default defineConfig({
   ...base,
   testDir: './iiwa',
   use: { ...base.use, baseURL: `http://localhost:${process.env.E2E_PORT}` },
+  projects: (base.projects ?? []).filter((p) => p.name === 'phone').map(({ testMatch, ...p }) => p),
 });

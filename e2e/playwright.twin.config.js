@@ -1,5 +1,5 @@
 // The second cell (config/twin-arm-cell.yaml: two UR arms, a third role) through the same code: its own stack on
-// its own ports and controller addresses, on the same three profiles. `npm test -w e2e` runs the demo cell's config, then this.
+// its own ports and controller addresses, on the tablet profile (the demo cell's run covers the other layouts). `npm test -w e2e` runs the demo cell's config, then this.
 import { defineConfig } from '@playwright/test';
 import base from './playwright.config.js';
 
@@ -11,4 +11,5 @@ export default defineConfig({
   ...base,
   testDir: './twin',
   use: { ...base.use, baseURL: `http://localhost:${process.env.E2E_PORT}` },
+  projects: (base.projects ?? []).filter((p) => p.name === 'tablet').map(({ testMatch, ...p }) => p),
 });

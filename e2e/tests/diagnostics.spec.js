@@ -1,4 +1,4 @@
-// Diagnostics as alarms, on every profile: the Vision module's monitor reports on /diagnostics; killed (kill -9),
+// Diagnostics as alarms, on the tablet: the Vision module's monitor reports on /diagnostics; killed (kill -9),
 // its status turns STALE on the Inspect page and raises the alarm the demo cell's rule gives it; started again, it
 // reports and the alarm goes inactive. The module is stopped at the end, as the next specs expect it (inactive), and
 // a module stopped on purpose leaves no stale alarm behind.

@@ -1,4 +1,4 @@
-// The Inspect page's ROS log on every profile: a warning a demo node logs (the parameters node refusing a value
+// The Inspect page's ROS log on the desktop: a warning a demo node logs (the parameters node refusing a value
 // sent by an engineer's `rosservice call`) appears with its node and level; the level, node and text filters narrow
 // the list; the entry is still there after a reload (the inspect node's history); the filtered entries export as
 // a text file. An operator, who does not see the page, cannot call the history through /ros.

@@ -1,4 +1,4 @@
-// The plant page on every profile (the issue asks for the phone): the demo cell's stack and a second cell (the twin
+// The plant page on the phone (the issue asks for it): the demo cell's stack and a second cell (the twin
 // cell's BFF, its ROS side not started) report on the stack's mosquitto as Sparkplug B edge nodes; the demo cell's
 // plant page lists both; a device fault on the demo cell shows there as an alarm within 1 s of its alarm status on
 // ROS; a cell's link opens that cell's own login.

@@ -1,4 +1,4 @@
-// The flight recorder on every profile (the issue asks for the tablet; the phone and desktop run it too): a device
+// The flight recorder on the tablet (the issue asks for it): a device
 // fault (/sim/trigger_fault stands for a real device) makes the recorder node save the seconds around it; the
 // Recordings page lists the new recording, its timeline shows the alarm, it downloads as MCAP, an admin deletes it.
 // An operator saves one by hand and has no Delete.

@@ -1,5 +1,5 @@
 // The 3D view (issue 24) on the demo cell, through the real page, BFF (the URDF from /robot_description), rosbridge,
-// driver and simulated UR5, on the phone, tablet and desktop profiles. The view's drawn joint values (its "Joint
+// driver and simulated UR5, on the tablet profile. The view's drawn joint values (its "Joint
 // values" readout, read from the drawn model) are compared with /joint_states watched from outside the app.
 import { test, expect } from '@playwright/test';
 import { goToPage, loginAs } from '../lib/app.js';
