@@ -43,7 +43,8 @@ test('live graphs from the cell file, with legend, values and Pause / Resume per
   await expect.poll(() => draws(wrench)).toBeGreaterThan(10);
   await expect(tactile.getByTestId('sensor-scatter-count')).toHaveText(/\d+ points/);
 
-  // Drawing keeps to the animation frames: over two seconds, no more draws than frames.
+  // Drawing keeps to the animation frames: over two seconds, no more draws than frames (the wrench arrives faster
+  // than the frames come), and at least one (live). How many frames come depends on the host's load (CI: 5).
   const before = await draws(wrench);
   const frames = await page.evaluate(() => new Promise((resolve) => {
     let n = 0;
@@ -52,7 +53,7 @@ test('live graphs from the cell file, with legend, values and Pause / Resume per
     requestAnimationFrame(tick);
   }));
   const drawn = (await draws(wrench)) - before;
-  expect(drawn).toBeGreaterThan(10);
+  expect(drawn).toBeGreaterThan(0);
   expect(drawn).toBeLessThanOrEqual(Number(frames) + 2);
 
   // Pause freezes this graph only.
