@@ -7,6 +7,7 @@ TCP speeds measured here are wall-clock figures.
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -327,9 +328,10 @@ def test_reconnects_after_the_controller_restarts() -> None:
         sim.stop()
 
 
-# Freeze a process (SIGSTOP) for some seconds, then let it go on, as a controller whose data pauses.
-FREEZE = ("import os, signal, sys, time; p = int(sys.argv[1]); os.kill(p, signal.SIGSTOP); "
-          "time.sleep(float(sys.argv[2])); os.kill(p, signal.SIGCONT)")
+# Freeze a process (SIGSTOP) for some seconds, then let it go on, as a controller whose data pauses. The test stops
+# it at once (a helper's own start took long enough on CI for the move to arrive first); a helper continues it, since
+# a ur_rtde call that blocks may hold this process's GIL past the pause.
+THAW = "import os, signal, sys, time; time.sleep(float(sys.argv[2])); os.kill(int(sys.argv[1]), signal.SIGCONT)"
 
 
 def ur_children(host: str) -> list[int]:
@@ -361,8 +363,8 @@ def test_a_controller_silent_mid_move_is_a_lost_connection_never_a_crash() -> No
             move = threading.Thread(target=lambda: result.append(driver.move_named("arm", target, 0.3, 0.5)))
             move.start()
             wait_for(lambda: driver.state().motion != "idle", 10, interval=0.01, what="the move started")
-            # Frozen by a helper process: a ur_rtde call that blocks may hold this process's GIL.
-            subprocess.run([sys.executable, "-c", FREEZE, str(sim.proc.pid), "3"], check=True, timeout=10)
+            os.kill(sim.proc.pid, signal.SIGSTOP)
+            subprocess.run([sys.executable, "-c", THAW, str(sim.proc.pid), "3"], check=True, timeout=10)
             move.join(20)
             assert result == [(False, f"robot controller at {FREEZE_HOST} is unreachable")]
             wait_for(lambda: driver.state().connected, 20, interval=0.02, what="reconnected")
@@ -371,6 +373,7 @@ def test_a_controller_silent_mid_move_is_a_lost_connection_never_a_crash() -> No
         ok, why = driver.move_named("arm", "home", 1.0, 1.5)
         assert (ok, why) == (True, "arrived at home")
     finally:
+        os.kill(sim.proc.pid, signal.SIGCONT)  # a failure while frozen must not leave the sim stopped
         driver.shutdown()
         sim.stop()
     wait_for(lambda: not ur_children(FREEZE_HOST), 10, what="no ur_rtde child after shutdown")
