@@ -201,3 +201,28 @@ export async function expectAtRest(robot, { rad = 1e-4, speed = STILL.speed, mes
   expect(o.travel, `the largest joint travel over ${messages} joint states, after ${timeout} ms (${o.detail})`).toBeLessThan(rad);
   expect(o.maxSpeed, `the largest joint speed over those joint states (${o.detail})`).toBeLessThan(speed);
 }
+
+/**
+ * Hold a jog button down (mouse: the pointer events a thumb would send) until the arm moves. A failure says what the
+ * page showed meanwhile: whether the button still read as held, why the pad refused, the driver's motion and message.
+ * @param {import('@playwright/test').Page} page @param {RobotWatch} robot @param {string} name
+ */
+export async function holdJog(page, robot, name) {
+  const before = robot.joints();
+  const button = page.getByRole('button', { name, exact: true });
+  await button.hover();
+  await page.mouse.down();
+  const moved = () => Math.max(...robot.joints().map((q, i) => Math.abs(q - before[i])));
+  // 15 s: the first command after the stack starts has the driver upload and start the control script first (CI:
+  // 5.5 s from the press to the script running, on a loaded host), and a page still building its 3D view may not run
+  // its heartbeat timer for seconds (the driver then stops the jog, and it goes on with the next heartbeat).
+  try {
+    await expect.poll(moved, { timeout: 15_000 }).toBeGreaterThan(0.01);
+  } catch (e) {
+    const read = async (/** @type {import('@playwright/test').Locator} */ l) => (await l.count()) ? (await l.first().innerText()).trim() : '-';
+    const shown = [`button pressed: ${await button.getAttribute('aria-pressed')}`,
+      `pad: ${await read(page.getByTestId('jog-blocked'))}`, `jog note: ${await read(page.getByTestId('jog-note'))}`,
+      `motion: ${await read(page.getByTestId('manual-motion'))}`, `message: ${await read(page.getByTestId('manual-message'))}`];
+    throw new Error(`${/** @type {Error} */ (e).message}\nthe page meanwhile: ${shown.join('; ')}`);
+  }
+}

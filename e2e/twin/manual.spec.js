@@ -5,7 +5,7 @@ import fs from 'node:fs';
 import yaml from 'js-yaml';
 import { test, expect } from '@playwright/test';
 import { loginAs } from '../lib/app.js';
-import { watchRobot, expectStandstill } from '../lib/robot.js';
+import { watchRobot, expectStandstill, holdJog } from '../lib/robot.js';
 
 const cell = /** @type {any} */ (yaml.load(fs.readFileSync(String(process.env.E2E_CELL_CONFIG), 'utf8')));
 const groups = cell.manual.groups.map((/** @type {any} */ g) => g.name);
@@ -34,13 +34,9 @@ test('each arm is chosen first, jogs while held and stops on release; the other 
     await chooser.getByRole('radio', { name: group }).check();
     await expect(chooser.getByRole('radio', { name: group })).toBeChecked();
     await expect(page.getByTestId('manual-status-group')).toContainText(group);
-    const jog = page.getByRole('button', { name: 'Jog joint 1 +', exact: true });
-    await expect(jog).toBeEnabled();
-    const before = arms[group].joints();
+    await expect(page.getByRole('button', { name: 'Jog joint 1 +', exact: true })).toBeEnabled();
     const otherBefore = arms[other].joints();
-    await jog.hover();
-    await page.mouse.down();
-    await expect.poll(() => moved(before, arms[group].joints()), { timeout: 5_000 }).toBeGreaterThan(0.01);
+    await holdJog(page, arms[group], 'Jog joint 1 +');
     await page.mouse.up();
     // Released: this arm comes to rest and stays at rest (CI once saw the arm still at the release, then moving: a
     // stalled browser's backlog of heartbeats came with the release, see expectStandstill); the other one never moved.

@@ -186,6 +186,21 @@ describe('Manual motion page', () => {
     vi.advanceTimersByTime(500);
     expect(jogSent().map((m) => m.direction)).toEqual([1, 1, 1, 0]);
     expect(jog.getAttribute('aria-pressed')).toBe('false');
+    expect(screen.queryByTestId('jog-note')).toBeNull(); // the user let go: nothing to explain
+  });
+
+  it('a jog the browser ends under a held button (a cancelled touch, the window losing focus) says why; a new press clears it', async () => {
+    await openAsHolder();
+    const jog = button('Jog joint 2 +');
+    await fireEvent.pointerDown(jog, { pointerId: 1, button: 0, pointerType: 'touch' });
+    await fireEvent.pointerCancel(jog, { pointerId: 1 });
+    expect(jogSent().map((m) => m.direction)).toEqual([1, 0]);
+    expect(screen.getByTestId('jog-note').textContent).toBe('Jog stopped: the browser cancelled the touch (a scroll or a system gesture)');
+    await fireEvent.pointerDown(jog, { pointerId: 2, button: 0, pointerType: 'touch' });
+    expect(screen.queryByTestId('jog-note')).toBeNull();
+    await fireEvent.blur(window);
+    expect(jogSent().map((m) => m.direction)).toEqual([1, 0, 1, 0]);
+    expect(screen.getByTestId('jog-note').textContent).toBe('Jog stopped: the window lost focus');
   });
 
   it('Cartesian jog in the tool frame, at the chosen jog speed; the pad shows the resulting speeds', async () => {

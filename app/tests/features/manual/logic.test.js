@@ -5,7 +5,7 @@ import {
   jogRows, jointShortName, defaultFraction, jogRates, moveRates, jogCommand, namedRequest, relativeRequest, poseRequest,
   poseToForm, poseRows, jointRows, modeText, robotModeTone, safetyTone, pickState, statusView, manualGate, notLiveBecause,
   JogHold, JOG_PERIOD_MS, MAX_MANUAL_TCP_SPEED, VIEW_ONLY_REASON, stateTopic, STATE_TYPE, sectionGroups, groupChoices,
-  chosenGroup, toolsOfGroup,
+  chosenGroup, toolsOfGroup, jogStopNote,
 } from '../../../src/lib/features/manual/logic.js';
 
 const LIMITS = normalizeLimits({
@@ -298,6 +298,19 @@ describe('manualGate: may motion controls be used, and why not', () => {
     expect(notLiveBecause({ offline: false, conn: 'disconnected', downSince: 1 })).toBe('disconnected');
     expect(notLiveBecause({ offline: false, conn: 'connecting', downSince: null })).toBeNull();
     expect(notLiveBecause({ offline: false, conn: 'connected', downSince: null })).toBeNull();
+  });
+});
+
+describe('why a jog ended', () => {
+  it('says nothing when the user ended it, and why otherwise (a gate passes its own words)', () => {
+    for (const own of ['released', 'key released', 'left the page', 'motion group changed', 'jog settings changed', 'Stop move', '']) {
+      expect(jogStopNote(own)).toBe('');
+    }
+    expect(jogStopNote('pointer capture lost')).toBe('Jog stopped: the button lost the pointer');
+    expect(jogStopNote('page hidden')).toBe('Jog stopped: the page went to the background');
+    expect(jogStopNote('ROS link lost')).toBe('Jog stopped: the connection to the robot was lost');
+    expect(jogStopNote('not sent: socket closed')).toBe('Jog stopped: the command could not be sent (socket closed)');
+    expect(jogStopNote('Take control first')).toBe('Jog stopped: Take control first');
   });
 });
 

@@ -701,8 +701,29 @@ def test_why_a_held_button_does_not_move_the_arm_is_logged_once_per_press(robot:
     lines = [r.getMessage() for r in caplog.records if r.name == "cell_nodes.manual"]
     assert [x for x in lines if x.startswith("jogging")] == ["jogging joint 1 + at 50 % (press 7)"]
     assert lines.count("jog joint 1 + (press 7) held: this press was stopped") == 1
-    assert lines.count("jog joint 1 + (press 8) ignored: it came late") == 1
+    assert lines.count("jog joint 1 + (press 8) ignored: it came late (0.90 s after the BFF let it through)") == 1
+    assert sum("ignored: it came late" in x for x in lines) == 1
     assert any(x.startswith("stopped") for x in lines), lines
+
+
+def test_a_refused_jog_and_lateness_after_a_run_of_the_jog_are_logged_again(robot: FakeRobot, caplog: Any) -> None:
+    """CI: a held button jogged twice, then moved nothing for 4 s and the log said nothing more: late heartbeats
+    after a run of the jog, and refusals, must each leave a line (once, not per heartbeat)."""
+    caplog.set_level(logging.INFO, logger="cell_nodes.manual")
+    d = make_driver(robot, clock=FakeClock())
+    assert d.connect()
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.5, press=3)   # late before the jog ran
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=3)  # runs
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.4, press=3)   # late again after the run
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.45, press=3)
+    d.jog("arm", "joint", 9, 1, 0.5, "base", 0.01, press=4)  # no joint 10
+    d.jog("arm", "joint", 9, 1, 0.5, "base", 0.01, press=4)
+    lines = [r.getMessage() for r in caplog.records if r.name == "cell_nodes.manual"]
+    late = [x for x in lines if "came late" in x]
+    assert late == ["jog joint 1 + (press 3) ignored: it came late (0.50 s after the BFF let it through)",
+                    "jog joint 1 + (press 3) ignored: it came late (0.40 s after the BFF let it through)"], lines
+    refused = [x for x in lines if "(press 4) refused" in x]
+    assert refused == ["jog joint 10 + (press 4) refused: group arm has no joint 10"], lines
 
 
 def test_a_refused_jog_start_is_tried_again_by_the_same_press(robot: FakeRobot) -> None:

@@ -594,6 +594,33 @@ export function notLiveBecause({ offline, conn, downSince }) {
  * @typedef {ReturnType<typeof jogCommand>} JogMsg
  */
 
+// Why JogHold stopped, as the page and the pad pass it (a closed gate passes its own reason, already in the
+// user's language). The user's own ends need no word; the others end a jog while the thumb may still be down.
+const OWN_JOG_ENDS = new Set(['released', 'key released', 'left the page', 'motion group changed', 'jog settings changed', 'Stop move']);
+/** @type {Record<string, () => string>} */
+const JOG_END_SAID = {
+  'pointer cancelled': () => m.manual_jog_note_cancelled(),
+  'pointer capture lost': () => m.manual_jog_note_capture(),
+  'focus left the button': () => m.manual_jog_note_blur(),
+  'window lost focus': () => m.manual_jog_note_window(),
+  'page hidden': () => m.manual_jog_note_hidden(),
+  'ROS link lost': () => m.manual_jog_note_link(),
+};
+const NOT_SENT = 'not sent: ';
+
+/**
+ * What the jog pad says after a jog ended that the user did not end ('' when they did): the arm stopped while the
+ * button may still be held, and only a new press moves it again.
+ * @param {string} reason  JogHold's stop reason
+ * @returns {string}
+ */
+export function jogStopNote(reason) {
+  if (!reason || OWN_JOG_ENDS.has(reason)) return '';
+  const why = JOG_END_SAID[reason]?.()
+    ?? (reason.startsWith(NOT_SENT) ? m.manual_jog_note_not_sent({ error: reason.slice(NOT_SENT.length) }) : reason);
+  return m.manual_jog_note_stopped({ why });
+}
+
 /**
  * Hold-to-run jogging: while a jog button is held, the same JogCommand goes out at once and then every
  * JOG_PERIOD_MS; on release (or any stop condition) one command with direction 0 goes out and nothing after
@@ -687,7 +714,7 @@ export class JogHold {
       this.publish(running);
       return true;
     } catch (e) {
-      this.stop(`not sent: ${e instanceof Error ? e.message : String(e)}`);
+      this.stop(`${NOT_SENT}${e instanceof Error ? e.message : String(e)}`);
       return false;
     }
   }

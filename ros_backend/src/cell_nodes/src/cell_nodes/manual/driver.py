@@ -979,7 +979,7 @@ class ManualDriver:
             # stopped nor keeps a jog alive, nor moves the arm for a session that lost control since it was sent.
             self._set_message(say("manual.jog_late", "jog ignored: it arrived {age} s after it was sent (more than the "
                                   "jog timeout, {timeout} s)", age=f"{age_s:.2f}", timeout=f"{self._jog.timeout:.2f}"))
-            self._note(cmd, "ignored: it came late")
+            self._note(cmd, "ignored: it came late", f" ({age_s:.2f} s after the BFF let it through)")
             return
         try:
             g = self.find_group(group)
@@ -996,6 +996,7 @@ class ManualDriver:
             if self.limits.jog_fraction(cmd.speed) is None:
                 raise Refused(say("manual.jog_speed_zero", "jog speed must be above 0"))
             if self._motion in (MOVING, TOOL):
+                self._note(cmd, "ignored: a move is running")
                 self._set_message(say("manual.jog_ignored_busy", "jog ignored: a move is running ({target})",
                                       target=self._target))
                 return
@@ -1006,6 +1007,7 @@ class ManualDriver:
             if self._jog.active is None or not cmd.same_motion(self._jog.active):
                 self._control()  # may upload the control script: not while holding the command lock
         except Refused as e:
+            self._note(cmd, "refused", f": {e.said}")
             self.refuse_jog(e.said)
             return
         with self._cmd_lock:
@@ -1019,16 +1021,19 @@ class ManualDriver:
             try:
                 self._start_jog(cmd, g)
                 log.info("jogging %s at %.0f %% (press %d)", cmd.label(), cmd.speed * 100, cmd.press)
+                self._noted = (0, "")  # a jog that runs again: why it stops being carried out is worth a line again
             except Refused as e:
+                self._note(cmd, "refused", f": {e.said}")
                 self._jog.clear(hold=False)  # it never moved: the press's next heartbeat tries again
                 self._set_idle(say("manual.jog_refused", "jog refused: {why}", why=e.said))
         self.on_change()
 
-    def _note(self, cmd: Jog, what: str) -> None:
-        """Log once per press why its jog was not carried out (its heartbeats come 20 times a second)."""
+    def _note(self, cmd: Jog, what: str, detail: str = "") -> None:
+        """Log once per press (and per run of its jog) why its jog was not carried out (its heartbeats come 20 times
+        a second); `detail` (e.g. how late) is the first such heartbeat's."""
         if self._noted != (cmd.press, what):
             self._noted = (cmd.press, what)
-            log.info("jog %s (press %d) %s", cmd.label(), cmd.press, what)
+            log.info("jog %s (press %d) %s%s", cmd.label(), cmd.press, what, detail)
 
     def refuse_jog(self, why: str) -> None:
         """A JogCommand that cannot be carried out: a running jog stops (never carry on after a bad or refused
