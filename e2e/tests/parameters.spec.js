@@ -56,6 +56,8 @@ test('an invalid value is refused in place with the field named, and by the node
   expect(r.result).toBe(true);
   expect(r.values.success).toBe(false);
   expect(r.values.errors.map((/** @type {any} */ e) => e.id)).toEqual(['parts_per_cycle']);
+  // Said with codes, for the page to say in the user's language (issue 29).
+  expect([r.values.code, r.values.errors[0].code]).toEqual(['parameters.nothing_saved_one', 'parameters.above_max']);
   expect(fs.readFileSync(csvPath(), 'utf8')).toBe(csvBefore);
 });
 

@@ -1,7 +1,7 @@
 import { describe, it, expect } from 'vitest';
 import { setLocale } from '../../../src/lib/paraglide/runtime.js';
 import { cellText } from '../../../src/lib/core/i18n.js';
-import { paramDef, byCategory, validate, diff, problems, fieldErrors, loadDraft, storeDraft, draftKey } from '../../../src/lib/features/parameters/logic.js';
+import { paramDef, byCategory, validate, diff, problems, fieldErrors, saidAnswer, loadDraft, storeDraft, draftKey } from '../../../src/lib/features/parameters/logic.js';
 
 const defs = [
   paramDef({ id: 'approach_height', category: 'Motion', label: 'Approach height', type: 'float', unit: 'mm', has_min: true, min: 5, has_max: true, max: 200, value: '50', default_value: '50' }),
@@ -95,5 +95,44 @@ describe("the cell file's labels and categories per language", () => {
     } finally {
       setLocale('en', { reload: false });
     }
+  });
+});
+
+describe("the node's refusals in the user's language (issue 29)", () => {
+  const kv = (/** @type {Record<string, string>} */ o) => Object.entries(o).map(([key, value]) => ({ key, value }));
+  const texts = { approach_height: { id: 'approach_height', label: { en: 'Approach height', es: 'Altura de aproximación' } } };
+  const ds = [paramDef({ id: 'approach_height', category: 'Motion', label: 'Approach height', type: 'float', unit: 'mm', has_max: true, max: 200.5, value: '50' }, texts),
+    paramDef({ id: 'parts', category: 'Process', label: 'Parts per cycle', type: 'int', value: '3' }, texts)];
+  // As cell_nodes/parameters says them (test_parameters_logic.py checks the node's side).
+  const above = { code: 'parameters.above_max', message: 'Approach height: 250.5 mm is above the maximum 200.5 mm',
+    params: { label: 'Approach height', value: '250.5 mm', 'value.code': 'parameters.quantity', 'value.number': '250.5', 'value.unit': 'mm',
+      max: '200.5 mm', 'max.code': 'parameters.quantity', 'max.number': '200.5', 'max.unit': 'mm' } };
+  const whole = { code: 'parameters.not_whole', message: "Parts per cycle: 'x' is not a whole number", params: { label: 'Parts per cycle', value: "'x'" } };
+  const nested = (/** @type {string} */ prefix, /** @type {any} */ s) => ({ [prefix]: s.message, [`${prefix}.code`]: s.code,
+    ...Object.fromEntries(Object.entries(s.params).map(([k, v]) => [`${prefix}.${k}`, v])) });
+  const answer = {
+    success: false, code: 'parameters.nothing_saved', message: `nothing saved: 2 invalid values: ${above.message}; ${whole.message}`,
+    params: kv({ count: '2', errors: `${above.message}; ${whole.message}`, 'errors.code': 'parameters.list',
+      ...nested('errors.first', above), ...nested('errors.rest', whole) }),
+    errors: [{ id: 'approach_height', ...above, params: kv(above.params) }, { id: 'parts', ...whole, params: kv(whole.params) }],
+  };
+
+  it("says each field's error and the whole answer in Spanish, with the cell file's label and Spanish numbers", () => {
+    setLocale('es', { reload: false });
+    try {
+      expect(fieldErrors(answer, ds)).toEqual({
+        approach_height: 'Altura de aproximación: 250,5 mm supera el máximo 200,5 mm',
+        parts: "Parts per cycle: 'x' no es un número entero",
+      });
+      expect(saidAnswer(answer, ds).message).toBe(
+        "no se guardó nada: 2 valores no válidos: Altura de aproximación: 250,5 mm supera el máximo 200,5 mm; Parts per cycle: 'x' no es un número entero");
+    } finally {
+      setLocale('en', { reload: false });
+    }
+  });
+  it("keeps the node's English where there is no code, and says the English the node said", () => {
+    expect(fieldErrors(answer, ds)).toEqual({ approach_height: above.message, parts: whole.message });
+    expect(saidAnswer(answer, ds).message).toBe(answer.message);
+    expect(saidAnswer({ success: false, message: 'from an older robot PC' }, ds).message).toBe('from an older robot PC');
   });
 });

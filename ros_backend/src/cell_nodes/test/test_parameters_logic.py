@@ -18,6 +18,7 @@ from cell_nodes.parameters.config import parse_parameters
 from cell_nodes.parameters.csvfile import COLUMNS, read_csv, render, write_csv
 from cell_nodes.parameters.store import ParameterStore
 from cell_nodes.parameters.values import InvalidValue, ParamDef, canonical
+from said_check import check_said
 
 DEMO = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
 
@@ -56,6 +57,7 @@ def store(tmp_path: Path, **kw) -> ParameterStore:
 def refused(pid: str, text: str) -> str:
     with pytest.raises(InvalidValue) as e:
         canonical(defs()[pid], text)
+    check_said(e.value.said)   # the app can say it in every language
     return str(e.value)
 
 
@@ -325,6 +327,34 @@ def test_set_is_all_or_nothing_and_lists_every_bad_field(tmp_path: Path) -> None
     assert one.errors == (("approach_height", "Approach height: 250 mm is above the maximum 200 mm"),)
     many = s.set([("ghost", "1")] * 200)
     assert not many.success and many.message.startswith("too many changes in one request (200, at most 100)")
+
+
+def test_what_set_says_has_codes_the_app_can_say_nested_to_each_field(tmp_path: Path) -> None:
+    """Every answer of set, and every field's error, is said with a code (issue 29): the app says the whole text in
+    the user's language, each listed field's error included, with the numbers and units as parameters."""
+    s = store(tmp_path)
+    refused = s.set([("parts_per_cycle", "2.5"), ("ghost", "1"), ("approach_height", "250"), ("speed_factor", "1.5")])
+    assert refused.message.code == "parameters.nothing_saved"
+    params = dict(refused.message.params)
+    assert params["count"] == "4" and params["errors.code"] == "parameters.list"
+    assert params["errors.first.code"] == "parameters.not_whole"
+    assert params["errors.rest.rest.first.code"] == "parameters.above_max"
+    assert params["errors.rest.rest.first.value.code"] == "parameters.quantity"
+    assert params["errors.rest.rest.first.value.number"] == "250"
+    assert params["errors.rest.rest.first.max.unit"] == "mm"
+    assert params["errors.rest.rest.rest.value"] == "1.5"            # no unit: the number alone
+    assert [m.code for _, m in refused.errors] == [
+        "parameters.not_whole", "parameters.unknown", "parameters.above_max", "parameters.above_max"]
+    said = [refused.message, *(m for _, m in refused.errors)]
+    said.append(s.set([("approach_height", "250")]).message)
+    said.append(s.set([("ghost", "1")] * 200).message)
+    said.append(s.set([("approach_height", "50")]).message)
+    said.append(s.set([("approach_height", "60")]).message)
+    said.append(s.set([("approach_height", "61"), ("parts_per_cycle", "4")]).message)
+    assert [m.code for m in said[-5:]] == ["parameters.nothing_saved_one", "parameters.too_many_changes",
+                                           "parameters.nothing_to_save", "parameters.saved_one", "parameters.saved"]
+    for text in said:
+        check_said(text)
 
 
 def test_set_backs_up_and_rotates(tmp_path: Path) -> None:

@@ -90,6 +90,7 @@ def test_get_set_refuse_hand_edit_and_restart(data_dir: Path) -> None:
                               ParameterValue(id="recipe_name", value=RECIPE),
                               ParameterValue(id="parts_per_cycle", value="3")])  # unchanged: not counted
         assert (reply.success, reply.message, list(reply.errors)) == (True, "saved 2 parameters", [])
+        assert (reply.code, [(kv.key, kv.value) for kv in reply.params]) == ("parameters.saved", [("count", "2")])
         assert "approach_height,60.5,mm," in csv.read_text(encoding="utf-8")
         assert '"Bügel, ""links"" ✓"' in csv.read_text(encoding="utf-8")
         assert (data_dir / "parameters.csv.bak").exists()
@@ -107,6 +108,12 @@ def test_get_set_refuse_hand_edit_and_restart(data_dir: Path) -> None:
         assert [(e.id, e.message) for e in reply.errors] == \
                [("approach_height", "Approach height: 250 mm is above the maximum 200 mm")]
         assert reply.message == "nothing saved: 1 invalid value: Approach height: 250 mm is above the maximum 200 mm"
+        # said with codes over ROS, for the app to say in the user's language (issue 29)
+        field = {kv.key: kv.value for kv in reply.errors[0].params}
+        assert reply.errors[0].code == "parameters.above_max" and field["label"] == "Approach height"
+        assert (field["value.code"], field["value.number"], field["max.number"]) == ("parameters.quantity", "250", "200")
+        assert reply.code == "parameters.nothing_saved_one"
+        assert {kv.key: kv.value for kv in reply.params}["errors.code"] == "parameters.above_max"
         assert csv.read_bytes() == before
         assert {p.id: p.value for p in get().parameters}["parts_per_cycle"] == "3"
         reply = set_(changes=[ParameterValue(id="../../etc/passwd", value="x")])

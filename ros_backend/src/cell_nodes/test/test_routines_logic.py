@@ -162,6 +162,7 @@ def test_good_names(name: str) -> None:
 ])
 def test_bad_names(name: str, problem: str) -> None:
     assert name_problem(name) == problem
+    check_said(name_problem(name))
     with pytest.raises(RoutineError):
         check_name(name)
 
@@ -284,6 +285,24 @@ def test_duplicates_and_overwrite(tmp_path: Path) -> None:
     assert r.save("pick2", "arm", "", [Step(POSE, P2)], True) == (True, "routine pick2 replaced (1 step)")
     assert r.store.read("pick2").steps == (Step(POSE, P2),)
     assert texts(log) == ["Routine pick2 saved (3 steps)", "Routine pick2 replaced (1 step)"]
+
+
+def test_refusals_are_said_with_codes_nested_to_their_cause(tmp_path: Path) -> None:
+    """Issue 29: a refused save, rename, delete or run is said with a code, its cause nested, so the app says all of
+    it in the user's language (said_check: every catalogue has it, with the same parameters)."""
+    r, *_ = make(tmp_path)
+    assert r.save("pick2", "arm", "", [Step(POSE, P2)], False)[0]
+    answers = [r.save("pick2", "arm", "", [Step(POSE, P2)], False)[1],
+               r.save("new", "arm", "", [Step(POSE, P2), Step(ACTION, tool="drill", action="close")], False)[1],
+               r.save("new", "arm", "", [], False)[1], r.save(" new", "arm", "", [Step(POSE, P2)], False)[1],
+               r.rename("pick2", "pick2")[1], r.delete("ghost")[1], r.run("ghost")[1]]
+    assert [a.code for a in answers] == ["routines.exists", "routines.step_problem", "routines.steps_needed",
+                                         "routines.name_space", "routines.same_name", "routines.no_such",
+                                         "routines.no_such"]
+    step = dict(answers[1].params)
+    assert (step["step"], step["why.code"], step["why.tool"]) == ("2", "routines.tool_unknown", "'drill'")
+    for a in answers:
+        check_said(a)
 
 
 def test_temp_files_and_foreign_files_are_not_routines(tmp_path: Path) -> None:

@@ -6,6 +6,7 @@
 
 import { m } from '$lib/paraglide/messages.js';
 import { cellText, getLocale } from '../../core/i18n.js';
+import { paramsOf, saidText } from '../../core/said.js';
 
 export const FEATURE_ID = 'parameters';
 
@@ -208,12 +209,42 @@ export function problems(defs, draft) {
   return out;
 }
 
-/** The node's per-field errors (cell_msgs/FieldError[]) as id -> message. @param {any} r */
-export function fieldErrors(r) {
+/**
+ * A parameter's label in what the node says (its English, from the cell file) as the page names it: the cell file's
+ * label in the user's language. @param {ParamDef[]} defs @returns {import('../../core/said.js').Rename}
+ */
+function labels(defs) {
+  return (key, value) => {
+    if (key !== 'label') return undefined;
+    const d = defs.find((x) => (typeof x.label === 'string' ? x.label : x.label.en) === value);
+    return d ? cellText(d.label) : undefined;
+  };
+}
+
+/** What the node said (a message with a code, or without one: its English), in the user's language. */
+function said(/** @type {any} */ r, /** @type {ParamDef[]} */ defs) {
+  const text = String(r?.message ?? '');
+  return typeof r?.code === 'string' && r.code ? saidText(r.code, paramsOf(r.params), text, labels(defs)) : text;
+}
+
+/**
+ * The node's per-field errors (cell_msgs/FieldError[]) as id -> message, in the user's language.
+ * @param {any} r @param {ParamDef[]} [defs]
+ */
+export function fieldErrors(r, defs = []) {
   /** @type {Record<string, string>} */
   const out = {};
-  for (const e of Array.isArray(r?.errors) ? r.errors : []) if (e?.id) out[String(e.id)] = String(e.message ?? m.parameters_invalid());
+  for (const e of Array.isArray(r?.errors) ? r.errors : []) if (e?.id) out[String(e.id)] = said(e, defs) || m.parameters_invalid();
   return out;
+}
+
+/**
+ * The set's answer with its message in the user's language (each listed field's error too).
+ * @template T @param {T} r @param {ParamDef[]} defs @returns {T}
+ */
+export function saidAnswer(r, defs) {
+  const v = /** @type {any} */ (r);
+  return v && typeof v === 'object' && typeof v.message === 'string' ? { ...v, message: said(v, defs) } : r;
 }
 
 // ---- the local draft: an edit made offline (or not yet saved) survives a reload, to review and send later ----

@@ -9,6 +9,7 @@ import os
 from dataclasses import dataclass
 from typing import Iterable, Optional, Sequence
 
+from ..said import say
 from .config import ParametersConfig
 from .csvfile import BACKUPS, read_csv, remove_temp_files, render, write_csv
 from .values import InvalidValue, ParamDef, Value, canonical, typed
@@ -25,13 +26,20 @@ class Entry:
 @dataclass(frozen=True)
 class SetResult:
     success: bool
-    message: str
-    errors: tuple[tuple[str, str], ...] = ()          # (id, message) per refused field
+    message: str                                      # a Said: the app says it in the user's language
+    errors: tuple[tuple[str, str], ...] = ()          # (id, message: a Said) per refused field
     changed: tuple[tuple[str, str, str], ...] = ()    # (id, old text, new text) per saved change
 
 
 def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def listed(texts: Sequence[str]) -> str:
+    """Texts joined with "; ", said as nested pairs so each keeps its code (the app says each in the user's language)."""
+    if len(texts) == 1:
+        return texts[0]
+    return say("parameters.list", "{first}; {rest}", first=texts[0], rest=listed(texts[1:]))
 
 
 class ParameterStore:
@@ -115,17 +123,18 @@ class ParameterStore:
         for pid, text in changes:
             defn = self._by_id.get(pid)
             if defn is None:
-                errors.append((pid, f"unknown parameter {pid!r}"))
+                errors.append((pid, say("parameters.unknown", "unknown parameter {id}", id=repr(pid))))
                 continue
             if pid in seen:
-                errors.append((pid, f"{defn.label}: changed twice in one request"))
+                errors.append((pid, say("parameters.changed_twice", "{label}: changed twice in one request",
+                                        label=defn.label)))
                 accepted.pop(pid, None)
                 continue
             seen.add(pid)
             try:
                 accepted[pid] = canonical(defn, text)[0]
             except InvalidValue as e:
-                errors.append((pid, str(e)))
+                errors.append((pid, e.said))
         return accepted, errors
 
     def set(self, changes: Iterable[tuple[str, str]]) -> SetResult:
@@ -134,22 +143,28 @@ class ParameterStore:
         changes = list(changes)
         limit = max(100, 2 * len(self.defs))
         if len(changes) > limit:
-            return SetResult(False, f"too many changes in one request ({len(changes)}, at most {limit}); "
-                                    "nothing saved")
+            return SetResult(False, say("parameters.too_many_changes",
+                                        "too many changes in one request ({count}, at most {max}); nothing saved",
+                                        count=len(changes), max=limit))
         self.refresh()  # a hand edit since the last read is kept, not overwritten by stale values
         accepted, errors = self.validate(changes)
         if errors:
-            return SetResult(False, f"nothing saved: {_plural(len(errors), 'invalid value')}: "
-                                    f"{'; '.join(m for _, m in errors)}", tuple(errors))
+            said = (say("parameters.nothing_saved_one", "nothing saved: {count} invalid value: {errors}", count=1,
+                        errors=errors[0][1]) if len(errors) == 1 else
+                    say("parameters.nothing_saved", "nothing saved: {count} invalid values: {errors}",
+                        count=len(errors), errors=listed([m for _, m in errors])))
+            return SetResult(False, said, tuple(errors))
         changed = tuple((pid, self.texts[pid], text) for pid, text in accepted.items()
                         if typed(self._by_id[pid], text) != typed(self._by_id[pid], self.texts[pid]))
         if not changed:
-            return SetResult(True, "nothing to save: no value differs from the saved one")
+            return SetResult(True, say("parameters.nothing_to_save", "nothing to save: no value differs from the saved one"))
         texts = dict(self.texts)
         texts.update({pid: new for pid, _, new in changed})
         try:
             write_csv(self.path, render(self.defs, texts), self.backups)
         except OSError as e:
-            return SetResult(False, f"could not save {self.name}: {e.strerror or e}; nothing saved")
+            return SetResult(False, say("parameters.not_saved", "could not save {file}: {error}; nothing saved",
+                                        file=self.name, error=e.strerror or str(e)))
         self.texts, self.problems, self._signature = texts, [], self._stat()
-        return SetResult(True, f"saved {_plural(len(changed), 'parameter')}", (), changed)
+        return SetResult(True, say("parameters.saved_one", "saved {count} parameter", count=1) if len(changed) == 1 else
+                         say("parameters.saved", "saved {count} parameters", count=len(changed)), (), changed)

@@ -2,7 +2,8 @@
 
 Values travel as text everywhere (the CSV, the services, the topic): `canonical(defn, text)` checks a text against
 the definition and returns the text to store and the typed value, or raises InvalidValue with a message that names
-the parameter by its label, for the operator.
+the parameter by its (English) label, for the operator, said with a code (`said.say`) so the app can say it in the
+user's language.
 """
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ import unicodedata
 from dataclasses import dataclass
 from decimal import Decimal
 from typing import Optional, Union
+
+from ..said import Said, say
 
 Value = Union[int, float, bool, str]
 
@@ -28,7 +31,12 @@ _TEXT_CONTROLS_ALLOWED = "\n\t"   # multi-line text and tabs are fine; other con
 
 
 class InvalidValue(ValueError):
-    """A value text a parameter does not accept; str() is the operator's message, naming the parameter."""
+    """A value text a parameter does not accept; str() is the operator's message, naming the parameter; `said` the
+    same with its code."""
+
+    def __init__(self, said: Said) -> None:
+        super().__init__(said)
+        self.said = said
 
 
 @dataclass(frozen=True)
@@ -55,7 +63,8 @@ def format_limit(x: float) -> str:
 
 
 def _with_unit(text: str, unit: str) -> str:
-    return f"{text} {unit}" if unit else text
+    """A number with its unit ("250 mm"; a number alone without one), said so the app writes the number its way."""
+    return say("parameters.quantity", "{number} {unit}", number=text, unit=unit) if unit else text
 
 
 def shown(text: str) -> str:
@@ -78,11 +87,11 @@ def _decimal_places(text: str) -> int:
 
 def _check_range(defn: ParamDef, number: float, text: str) -> None:
     if defn.min is not None and number < defn.min:
-        raise InvalidValue(f"{defn.label}: {_with_unit(text, defn.unit)} is below the minimum "
-                           f"{_with_unit(format_limit(defn.min), defn.unit)}")
+        raise InvalidValue(say("parameters.below_min", "{label}: {value} is below the minimum {min}", label=defn.label,
+                               value=_with_unit(text, defn.unit), min=_with_unit(format_limit(defn.min), defn.unit)))
     if defn.max is not None and number > defn.max:
-        raise InvalidValue(f"{defn.label}: {_with_unit(text, defn.unit)} is above the maximum "
-                           f"{_with_unit(format_limit(defn.max), defn.unit)}")
+        raise InvalidValue(say("parameters.above_max", "{label}: {value} is above the maximum {max}", label=defn.label,
+                               value=_with_unit(text, defn.unit), max=_with_unit(format_limit(defn.max), defn.unit)))
 
 
 def canonical(defn: ParamDef, text: str) -> tuple[str, Value]:
@@ -90,54 +99,66 @@ def canonical(defn: ParamDef, text: str) -> tuple[str, Value]:
     as written (stripped, no leading `+`), so `0.1` and `1e-05` stay exactly that; bools are `true`/`false` in any
     case; enum values must be one of the options; strings are kept exactly as given."""
     if not isinstance(text, str):
-        raise InvalidValue(f"{defn.label}: expected text, got {type(text).__name__}")
+        raise InvalidValue(say("parameters.not_text", "{label}: expected text, got {kind}", label=defn.label,
+                               kind=type(text).__name__))
     label = defn.label
     if defn.type in ("int", "float", "bool", "enum"):
         stripped = text.strip()   # spreadsheets pad cells; surrounding blanks never mean anything for these types
         if not stripped:
-            raise InvalidValue(f"{label}: a value is needed")
+            raise InvalidValue(say("parameters.value_needed", "{label}: a value is needed", label=label))
     if defn.type == "int":
         if len(stripped) > MAX_NUMBER_TEXT or not _INT.fullmatch(stripped):
-            raise InvalidValue(f"{label}: {shown(stripped)} is not a whole number")
+            raise InvalidValue(say("parameters.not_whole", "{label}: {value} is not a whole number", label=label,
+                                   value=shown(stripped)))
         number = int(stripped)
         if abs(number) > MAX_SAFE_INT:
-            raise InvalidValue(f"{label}: {stripped} is too large (at most {MAX_SAFE_INT} either way)")
+            raise InvalidValue(say("parameters.too_large_int", "{label}: {value} is too large (at most {max} either way)",
+                                   label=label, value=stripped, max=MAX_SAFE_INT))
         out = str(number)
         _check_range(defn, number, out)
         return out, number
     if defn.type == "float":
         if len(stripped) > MAX_NUMBER_TEXT or not _FLOAT.fullmatch(stripped):
-            raise InvalidValue(f"{label}: {shown(stripped)} is not a number")
+            raise InvalidValue(say("parameters.not_number", "{label}: {value} is not a number", label=label,
+                                   value=shown(stripped)))
         out = stripped[1:] if stripped.startswith("+") else stripped
         number = float(out)
         if not math.isfinite(number):
-            raise InvalidValue(f"{label}: {out} is too large")
+            raise InvalidValue(say("parameters.too_large", "{label}: {value} is too large", label=label, value=out))
         _check_range(defn, number, out)
         if defn.decimals is not None and _decimal_places(out) > defn.decimals:
             if defn.decimals == 0:
-                raise InvalidValue(f"{label}: {out} must have no decimals")
-            raise InvalidValue(f"{label}: {out} has more than {defn.decimals} "
-                               f"decimal{'s' if defn.decimals != 1 else ''}")
+                raise InvalidValue(say("parameters.no_decimals", "{label}: {value} must have no decimals", label=label,
+                                       value=out))
+            if defn.decimals == 1:
+                raise InvalidValue(say("parameters.too_many_decimals_one", "{label}: {value} has more than {count} decimal",
+                                       label=label, value=out, count=1))
+            raise InvalidValue(say("parameters.too_many_decimals", "{label}: {value} has more than {count} decimals",
+                                   label=label, value=out, count=defn.decimals))
         return out, number
     if defn.type == "bool":
         low = stripped.lower()
         if low not in ("true", "false"):
-            raise InvalidValue(f"{label}: {shown(stripped)} is not true or false")
+            raise InvalidValue(say("parameters.not_bool", "{label}: {value} is not true or false", label=label,
+                                   value=shown(stripped)))
         return low, low == "true"
     if defn.type == "enum":
         if stripped not in defn.options:
-            raise InvalidValue(f"{label}: {shown(stripped)} is not one of {', '.join(defn.options)}")
+            raise InvalidValue(say("parameters.not_option", "{label}: {value} is not one of {options}", label=label,
+                                   value=shown(stripped), options=", ".join(defn.options)))
         return stripped, stripped
     if defn.type == "string":
         bound = defn.max_length or DEFAULT_MAX_LENGTH
         if len(text) > bound:
-            raise InvalidValue(f"{label}: {len(text)} characters, at most {bound}")
+            raise InvalidValue(say("parameters.too_long", "{label}: {length} characters, at most {max}", label=label,
+                                   length=len(text), max=bound))
         for ch in text:
             category = unicodedata.category(ch)
             if (category == "Cc" and ch not in _TEXT_CONTROLS_ALLOWED) or category == "Cs":
-                raise InvalidValue(f"{label}: contains a control character (U+{ord(ch):04X})")
+                raise InvalidValue(say("parameters.control_char", "{label}: contains a control character (U+{char})",
+                                       label=label, char=f"{ord(ch):04X}"))
         return text, text
-    raise InvalidValue(f"{label}: unknown type {defn.type!r}")
+    raise InvalidValue(say("parameters.unknown_type", "{label}: unknown type {type}", label=label, type=repr(defn.type)))
 
 
 def typed(defn: ParamDef, text: str) -> Value:

@@ -9,15 +9,10 @@ from typing import Optional, Sequence
 from .config import RoutinesConfig
 from .log import LogBook
 from .model import (ACTION, POSE, Routine, RoutineError, Step, check_group, check_name, check_tool_action,
-                    checked, format_pose, runnable_problem)
-from ..said import Said, say
+                    checked, format_pose, runnable_problem, said_of, step_kind_problem)
+from ..said import say
 from .runner import Robot, Runner, busy, driver_failed, steps_text
 from .store import RoutineStore
-
-
-def _said(e: Exception) -> Said:
-    """A refusal's text, with its code when it was said with one."""
-    return e.args[0] if e.args and isinstance(e.args[0], Said) else Said(str(e))
 
 
 def _title(word: str) -> str:
@@ -56,7 +51,7 @@ class Routines:
                 if not ok:
                     raise RoutineError(say("routines.no_pose", "cannot read the pose: {why}", why=why))
                 if len(tcp) != 6 or not all(math.isfinite(v) for v in tcp):
-                    raise RoutineError("the robot driver answered no TCP pose")
+                    raise RoutineError(say("routines.no_tcp", "the robot driver answered no TCP pose"))
                 step = Step(POSE, tuple(float(v) for v in tcp), tuple(float(v) for v in joints))
                 text = say("routines.pose_recorded", "Pose recorded: {pose}", pose=format_pose(step.pose))
             elif kind == ACTION:
@@ -66,9 +61,9 @@ class Routines:
                 step = Step(ACTION, tool=tool, action=action)
                 text = say("routines.action_recorded", "{tool} {action} recorded", tool=_title(tool), action=action)
             else:
-                raise RoutineError(f"unknown step kind {kind!r} (pose or action)")
+                raise RoutineError(step_kind_problem(kind))
         except RoutineError as e:
-            return False, _said(e), None
+            return False, said_of(e), None
         except Exception as e:  # the robot interface should answer, not raise
             return False, say("routines.no_pose", "cannot read the pose: {why}", why=driver_failed(e)), None
         self.log.info(text)
@@ -83,7 +78,7 @@ class Routines:
                     raise RoutineError(busy(name))
                 replaced = self.store.save(routine, overwrite)
         except RoutineError as e:
-            return False, _said(e)
+            return False, said_of(e)
         steps = steps_text(len(routine.steps))
         if replaced:
             self.log.info(say("routines.replaced_log", "Routine {name} replaced ({steps})", name=name, steps=steps))
@@ -100,7 +95,7 @@ class Routines:
                     raise RoutineError(busy(name))
                 self.store.rename(name, new_name)
         except RoutineError as e:
-            return False, _said(e)
+            return False, said_of(e)
         self.log.info(say("routines.renamed_log", "Routine {name} renamed to {new_name}", name=name, new_name=new_name))
         return True, say("routines.renamed", "routine {name} renamed to {new_name}", name=name, new_name=new_name)
 
@@ -112,7 +107,7 @@ class Routines:
                     raise RoutineError(busy(name))
                 self.store.delete(name)
         except RoutineError as e:
-            return False, _said(e)
+            return False, said_of(e)
         self.log.info(say("routines.deleted_log", "Routine {name} deleted", name=name))
         return True, say("routines.deleted", "routine {name} deleted", name=name)
 
@@ -128,10 +123,11 @@ class Routines:
                                        error=routine.error))
             problem = runnable_problem(self.config, routine)
             if problem:
-                raise RoutineError(f"routine {name} {problem}")
+                raise RoutineError(say("routines.not_runnable_named", "routine {name} {problem}", name=name,
+                                       problem=problem))
         except RoutineError as e:
-            self.log.warning(say("routines.run_refused", "Run refused: {why}", why=_said(e)))
-            return False, _said(e)
+            self.log.warning(say("routines.run_refused", "Run refused: {why}", why=said_of(e)))
+            return False, said_of(e)
         return self.runner.run(routine)
 
     def stop(self) -> tuple[bool, str]:

@@ -22,7 +22,12 @@ _NAME_CHARS = re.compile(r"[A-Za-z0-9 _.\-]+")
 
 
 class RoutineError(Exception):
-    """A request that is refused; the message goes back to the caller as is."""
+    """A request that is refused; the message (a Said where it was said with a code) goes back to the caller as is."""
+
+
+def said_of(e: Exception) -> Said:
+    """A refusal's text, with its code when it was said with one."""
+    return e.args[0] if e.args and isinstance(e.args[0], Said) else Said(str(e))
 
 
 @dataclass(frozen=True)
@@ -49,21 +54,24 @@ def _shown(name: str) -> str:
     return repr(name if len(name) <= 80 else name[:77] + "...")
 
 
-def name_problem(name: Any) -> Optional[str]:
+def name_problem(name: Any) -> Optional[Said]:
     """Why `name` cannot be a routine name, or None: 1-64 ASCII letters, digits, space, - _ . ; not starting with a
     dot (hidden files, `.`/`..`) and not starting or ending with a space."""
     if not isinstance(name, str):
-        return f"a routine name must be text, got {type(name).__name__}"
+        return say("routines.name_not_text", "a routine name must be text, got {kind}", kind=type(name).__name__)
     if not name:
-        return "a routine needs a name"
+        return say("routines.name_needed", "a routine needs a name")
     if len(name) > MAX_NAME:
-        return f"routine name {_shown(name)} is too long ({len(name)} characters, at most {MAX_NAME})"
+        return say("routines.name_too_long", "routine name {name} is too long ({length} characters, at most {max})",
+                   name=_shown(name), length=len(name), max=MAX_NAME)
     if not _NAME_CHARS.fullmatch(name):
-        return f"invalid routine name {_shown(name)}: use letters, digits, space, - _ ."
+        return say("routines.name_chars", "invalid routine name {name}: use letters, digits, space, - _ .",
+                   name=_shown(name))
     if name.startswith("."):
-        return f"invalid routine name {_shown(name)}: it must not start with a dot"
+        return say("routines.name_dot", "invalid routine name {name}: it must not start with a dot", name=_shown(name))
     if name != name.strip(" "):
-        return f"invalid routine name {_shown(name)}: it must not start or end with a space"
+        return say("routines.name_space", "invalid routine name {name}: it must not start or end with a space",
+                   name=_shown(name))
     return None
 
 
@@ -96,54 +104,61 @@ def describe(step: Step) -> Said:
 
 def check_group(config: RoutinesConfig, group: str) -> None:
     if not group:
-        raise RoutineError(f"a routine needs a motion group (routines.groups: {config.group_names()})")
+        raise RoutineError(say("routines.group_needed", "a routine needs a motion group (routines.groups: {groups})",
+                               groups=config.group_names()))
     if group not in config.groups:
-        raise RoutineError(f"unknown motion group {_shown(group)} for routines (routines.groups: "
-                           f"{config.group_names()})")
+        raise RoutineError(say("routines.group_unknown", "unknown motion group {group} for routines (routines.groups: "
+                               "{groups})", group=_shown(group), groups=config.group_names()))
 
 
 def check_tool_action(config: RoutinesConfig, tool: str, action: str, group: str = "") -> None:
     """The tool may be used (by a routine of `group`, when given: a tool of that group) and has the action."""
     if not tool:
-        raise RoutineError(f"a tool action needs a tool (routines.tools: {config.tool_names(group)})")
-    if tool not in config.tools:
-        raise RoutineError(f"unknown tool {_shown(tool)} for routines (routines.tools: {config.tool_names()})")
-    own = config.tool_groups.get(tool)
-    if group and own and own != group:
-        raise RoutineError(f"tool {tool} is on group {own}, not {group} (a routine uses its group's tools: "
-                           f"{config.tool_names(group)})")
+        raise RoutineError(say("routines.tool_needed", "a tool action needs a tool (routines.tools: {tools})",
+                               tools=config.tool_names(group)))
+    check_tool(config, tool, group)
     actions = config.tools[tool]
     if action not in actions:
-        raise RoutineError(f"unknown action {_shown(action)} for tool {tool} (it has: {', '.join(actions) or 'none'})")
+        raise RoutineError(say("routines.action_unknown", "unknown action {action} for tool {tool} (it has: {actions})",
+                               action=_shown(action), tool=tool, actions=", ".join(actions) or "none"))
 
 
 def check_tool(config: RoutinesConfig, tool: str, group: str) -> None:
-    """The routine's default tool: offered for routines and on the routine's group."""
+    """The tool is offered for routines and, when a group is given, on that group."""
     if tool not in config.tools:
-        raise RoutineError(f"unknown tool {_shown(tool)} for routines (routines.tools: {config.tool_names()})")
+        raise RoutineError(say("routines.tool_unknown", "unknown tool {tool} for routines (routines.tools: {tools})",
+                               tool=_shown(tool), tools=config.tool_names()))
     own = config.tool_groups.get(tool)
-    if own and own != group:
-        raise RoutineError(f"tool {tool} is on group {own}, not {group} (a routine uses its group's tools: "
-                           f"{config.tool_names(group)})")
+    if group and own and own != group:
+        raise RoutineError(say("routines.tool_other_group", "tool {tool} is on group {own}, not {group} (a routine "
+                               "uses its group's tools: {tools})", tool=tool, own=own, group=group,
+                               tools=config.tool_names(group)))
 
 
 def _step_shape(step: Step, group_joints: Optional[int]) -> Step:
     """The step's own form (kind, numbers), normalised: a pose keeps pose and joints, an action tool and action."""
     if step.kind == POSE:
         if len(step.pose) != 6 or not _finite(step.pose):
-            raise RoutineError(f"a pose needs 6 finite numbers (x, y, z in m, rx, ry, rz in rad), got "
-                               f"{len(step.pose)} values" + ("" if _finite(step.pose) else " (not all finite)"))
+            if not _finite(step.pose):
+                raise RoutineError(say("routines.pose_not_finite", "a pose needs 6 finite numbers (x, y, z in m, rx, "
+                                       "ry, rz in rad), got {count} values (not all finite)", count=len(step.pose)))
+            raise RoutineError(say("routines.pose_numbers", "a pose needs 6 finite numbers (x, y, z in m, rx, ry, rz "
+                                   "in rad), got {count} values", count=len(step.pose)))
         if step.joints and not _finite(step.joints):
-            raise RoutineError("joints must be finite numbers (rad)")
+            raise RoutineError(say("routines.joints_not_finite", "joints must be finite numbers (rad)"))
         if step.joints and group_joints is not None and len(step.joints) != group_joints:
-            raise RoutineError(f"joints must be empty or the group's {group_joints} joint positions, got "
-                               f"{len(step.joints)} values")
+            raise RoutineError(say("routines.joints_count", "joints must be empty or the group's {joints} joint "
+                                   "positions, got {count} values", joints=group_joints, count=len(step.joints)))
         return Step(POSE, tuple(float(v) for v in step.pose), tuple(float(v) for v in step.joints))
     if step.kind == ACTION:
         if not isinstance(step.tool, str) or not isinstance(step.action, str) or not step.action:
-            raise RoutineError("an action step needs an action (one of the tool's actions)")
+            raise RoutineError(say("routines.action_needed", "an action step needs an action (one of the tool's actions)"))
         return Step(ACTION, tool=step.tool, action=step.action)
-    raise RoutineError(f"unknown step kind {_shown(str(step.kind))} (pose or action)")
+    raise RoutineError(step_kind_problem(str(step.kind)))
+
+
+def step_kind_problem(kind: str) -> Said:
+    return say("routines.step_kind", "unknown step kind {kind} (pose or action)", kind=_shown(kind))
 
 
 def checked(config: RoutinesConfig, name: str, group: str, tool: str, steps: Sequence[Step]) -> Routine:
@@ -153,9 +168,10 @@ def checked(config: RoutinesConfig, name: str, group: str, tool: str, steps: Seq
     if tool:
         check_tool(config, tool, group)
     if not steps:
-        raise RoutineError("a routine needs at least one step")
+        raise RoutineError(say("routines.steps_needed", "a routine needs at least one step"))
     if len(steps) > MAX_STEPS:
-        raise RoutineError(f"too many steps ({len(steps)}, at most {MAX_STEPS})")
+        raise RoutineError(say("routines.steps_too_many", "too many steps ({count}, at most {max})", count=len(steps),
+                               max=MAX_STEPS))
     out = []
     for i, step in enumerate(steps, 1):
         try:
@@ -164,7 +180,7 @@ def checked(config: RoutinesConfig, name: str, group: str, tool: str, steps: Seq
                 s = Step(ACTION, tool=s.tool or tool, action=s.action)
                 check_tool_action(config, s.tool, s.action, group)
         except RoutineError as e:
-            raise RoutineError(f"step {i}: {e}") from None
+            raise RoutineError(say("routines.step_problem", "step {step}: {why}", step=i, why=said_of(e))) from None
         out.append(s)
     return Routine(name, group, tool, tuple(out))
 
@@ -174,7 +190,7 @@ def runnable_problem(config: RoutinesConfig, routine: Routine) -> str:
     try:
         checked(config, routine.name, routine.group, routine.tool, routine.steps)
     except RoutineError as e:
-        return f"cannot run with this cell file: {e}"
+        return say("routines.not_runnable", "cannot run with this cell file: {why}", why=said_of(e))
     return ""
 
 

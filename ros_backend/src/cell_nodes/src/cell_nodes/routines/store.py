@@ -9,6 +9,7 @@ import os
 import tempfile
 from typing import Optional
 
+from ..said import Said, say
 from .model import Routine, RoutineError, check_name, decode, encode, name_problem
 
 SUFFIX = ".json"
@@ -18,6 +19,14 @@ MAX_FILE_BYTES = 4 * 1024 * 1024
 
 def _why(e: OSError) -> str:
     return e.strerror or str(e)
+
+
+def no_such(name: str) -> Said:
+    return say("routines.no_such", "no routine named {name}", name=repr(name))
+
+
+def exists(name: str) -> Said:
+    return say("routines.exists", "a routine named {name} exists already", name=repr(name))
 
 
 class RoutineStore:
@@ -30,7 +39,7 @@ class RoutineStore:
         path = os.path.join(self.directory, name + SUFFIX)
         # check_name already keeps the name to one path component; this guards the guard.
         if os.path.dirname(path) != self.directory:
-            raise RoutineError(f"invalid routine name {name!r}")
+            raise RoutineError(say("routines.name_invalid", "invalid routine name {name}", name=repr(name)))
         return path
 
     def _names(self) -> list[str]:
@@ -39,7 +48,8 @@ class RoutineStore:
         except FileNotFoundError:
             return []
         except OSError as e:
-            raise RoutineError(f"cannot read the routines directory {self.directory}: {_why(e)}") from None
+            raise RoutineError(say("routines.cannot_read_directory", "cannot read the routines directory {directory}: "
+                                   "{why}", directory=self.directory, why=_why(e))) from None
         # Other files (temp files, hidden files, names we would refuse) are not routines.
         return [f[:-len(SUFFIX)] for f in entries if f.endswith(SUFFIX) and name_problem(f[:-len(SUFFIX)]) is None]
 
@@ -68,7 +78,7 @@ class RoutineStore:
             with open(path, "rb") as f:
                 data = f.read(MAX_FILE_BYTES + 1)
         except FileNotFoundError:
-            raise RoutineError(f"no routine named {name!r}") from None
+            raise RoutineError(no_such(name)) from None
         except OSError as e:
             return Routine(name, error=f"cannot read {name}{SUFFIX}: {_why(e)}")
         try:
@@ -83,12 +93,13 @@ class RoutineStore:
         final = self.path(routine.name)
         replaced = os.path.lexists(final)
         if replaced and not overwrite:
-            raise RoutineError(f"a routine named {routine.name!r} exists already")
+            raise RoutineError(exists(routine.name))
         try:
             os.makedirs(self.directory, exist_ok=True)
             fd, tmp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=SUFFIX, dir=self.directory)
         except OSError as e:
-            raise RoutineError(f"cannot write in the routines directory {self.directory}: {_why(e)}") from None
+            raise RoutineError(say("routines.cannot_write_directory", "cannot write in the routines directory "
+                                   "{directory}: {why}", directory=self.directory, why=_why(e))) from None
         try:
             with os.fdopen(fd, "wb") as f:
                 f.write(encode(routine))
@@ -101,7 +112,8 @@ class RoutineStore:
                 self._link_new(tmp, final, routine.name)
             self._sync_directory()
         except OSError as e:
-            raise RoutineError(f"cannot save routine {routine.name!r}: {_why(e)}") from None
+            raise RoutineError(say("routines.cannot_save", "cannot save routine {name}: {why}", name=repr(routine.name),
+                                   why=_why(e))) from None
         finally:
             try:
                 os.unlink(tmp)
@@ -112,24 +124,26 @@ class RoutineStore:
     def rename(self, name: str, new_name: str) -> None:
         src, dst = self.path(name), self.path(new_name)
         if not os.path.lexists(src):
-            raise RoutineError(f"no routine named {name!r}")
+            raise RoutineError(no_such(name))
         if name == new_name:
-            raise RoutineError(f"routine {name!r} has that name already")
+            raise RoutineError(say("routines.same_name", "routine {name} has that name already", name=repr(name)))
         try:
             if self._link_new(src, dst, new_name):
                 os.unlink(src)
             self._sync_directory()
         except OSError as e:
-            raise RoutineError(f"cannot rename routine {name!r}: {_why(e)}") from None
+            raise RoutineError(say("routines.cannot_rename", "cannot rename routine {name}: {why}", name=repr(name),
+                                   why=_why(e))) from None
 
     def delete(self, name: str) -> None:
         try:
             os.unlink(self.path(name))
             self._sync_directory()
         except FileNotFoundError:
-            raise RoutineError(f"no routine named {name!r}") from None
+            raise RoutineError(no_such(name)) from None
         except OSError as e:
-            raise RoutineError(f"cannot delete routine {name!r}: {_why(e)}") from None
+            raise RoutineError(say("routines.cannot_delete", "cannot delete routine {name}: {why}", name=repr(name),
+                                   why=_why(e))) from None
 
     def remove_temp_files(self) -> int:
         """Temp files left by a crash mid-save (only this node writes here)."""
@@ -156,13 +170,13 @@ class RoutineStore:
             os.link(src, dst, follow_symlinks=False)
             return True
         except FileExistsError:
-            raise RoutineError(f"a routine named {dst_name!r} exists already") from None
+            raise RoutineError(exists(dst_name)) from None
         except OSError as e:
             if e.errno not in (errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EXDEV, errno.EMLINK):
                 raise
             # A file system without hard links: check, then rename (the facade's lock keeps our own writers out).
             if os.path.lexists(dst):
-                raise RoutineError(f"a routine named {dst_name!r} exists already") from None
+                raise RoutineError(exists(dst_name)) from None
             os.rename(src, dst)
             return False
 
