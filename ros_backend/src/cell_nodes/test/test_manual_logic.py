@@ -26,6 +26,8 @@ from cell_nodes.manual.limits import (STOP_DECEL_JOINT, STOP_DECEL_TCP, TCP_COMM
 
 CAP = TCP_SPEED_CAP * TCP_COMMAND_MARGIN  # the highest TCP speed ever commanded
 from conftest import wait_for
+from said_check import check_said
+from cell_nodes.said import say
 
 DEMO = Path(__file__).resolve().parents[4] / "config" / "demo-cell.yaml"
 HOME = [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
@@ -200,6 +202,13 @@ def test_supervisor_stop_replace_never_queue() -> None:
     assert sup.command(jog(direction=0)) is Decision.NOTHING
     assert jog(axis=1, direction=-1).label() == "joint 2 -"
     assert jog(mode="cartesian", axis=4, frame="tool").label() == "RY + (tool)"
+    # said with codes, so "jogging joint 2 -" reads "articulación 2 -" in Spanish (issue 29)
+    labels = [jog(axis=1, direction=-1).label(), jog(mode="cartesian", axis=0).label(),
+              jog(mode="cartesian", axis=4, frame="tool").label()]
+    assert [x.code for x in labels] == ["manual.jog_joint", "manual.jog_axis", "manual.jog_axis_tool"]
+    assert dict(labels[0].params) == {"joint": "2", "sign": "-"}
+    for x in labels:
+        check_said(say("manual.jogging", "jogging {jog}", jog=x))
 
 
 # ---------------------------------------------------------------------------------------------- cell file

@@ -23,6 +23,8 @@ import time
 from dataclasses import dataclass
 from typing import Callable, Optional
 
+from ..said import Said, say
+
 JOINT, CARTESIAN = "joint", "cartesian"
 AXES = ("X", "Y", "Z", "RX", "RY", "RZ")
 FRAMES = ("base", "tool")
@@ -38,13 +40,16 @@ class Jog:
     frame: str = "base"
     press: int = 0     # the page's number for this press of the button (0: a publisher without one)
 
-    def label(self) -> str:
-        """What the state's motion_target says: "joint 2 +", "X -", "RZ + (tool)"."""
+    def label(self) -> Said:
+        """What the state's motion_target says: "joint 2 +", "X -", "RZ + (tool)" (said with a code: the messages
+        that name the jog say it in the user's language)."""
         sign = "+" if self.direction > 0 else "-"
         if self.mode == JOINT:
-            return f"joint {self.axis + 1} {sign}"
-        name = AXES[self.axis] if 0 <= self.axis < len(AXES) else f"axis {self.axis}"
-        return f"{name} {sign}" + (" (tool)" if self.frame == "tool" else "")
+            return say("manual.jog_joint", "joint {joint} {sign}", joint=self.axis + 1, sign=sign)
+        name = AXES[self.axis] if 0 <= self.axis < len(AXES) else str(self.axis)
+        if self.frame == "tool":
+            return say("manual.jog_axis_tool", "{axis} {sign} (tool)", axis=name, sign=sign)
+        return say("manual.jog_axis", "{axis} {sign}", axis=name, sign=sign)
 
     def same_motion(self, other: Optional["Jog"]) -> bool:
         return other is not None and (self.group, self.mode, self.axis, self.direction, self.frame, self.press) == \
