@@ -105,6 +105,9 @@ test("the robot driver's answers in Spanish: a move's result on the Manual page,
   // message are both said in Spanish.
   await expect(page.getByTestId('move-named-feedback')).toContainText('se alcanzó home', { timeout: 30_000 });
   await expect(page.getByTestId('manual-message')).toContainText('se alcanzó home');
+  // A tool action's button is the cell file's Spanish title, and the driver's answer names it so.
+  await page.getByRole('button', { name: 'Abrir pinza' }).click();
+  await expect(page.getByTestId('tool-gripper-open-feedback')).toContainText('Abrir pinza: listo', { timeout: 15_000 });
   await page.getByRole('button', { name: 'Liberar el control' }).click();
 });
 

@@ -298,11 +298,19 @@ test('routines read the state of the groups they record for, and tell the page e
   assert.ok(g.subscribe.includes('/cell/manual/right/state'));
   assert.ok(!g.subscribe.includes('/cell/manual/left/tcp_pose'), 'the TCP pose topic is the Manual page\'s');
   const routines = FEATURES.find((f) => f.id === 'routines');
-  assert.deepEqual(routines.view(c.routines, 'teacher', c), { groups: ['left', 'right'], tools: ['gripper', 'vacuum'], tool_groups: { gripper: 'left', vacuum: 'right' } });
+  const { action_titles: titles, ...view } = routines.view(c.routines, 'teacher', c);
+  assert.deepEqual(view, { groups: ['left', 'right'], tools: ['gripper', 'vacuum'], tool_groups: { gripper: 'left', vacuum: 'right' } });
+  assert.deepEqual(Object.keys(titles), ['gripper', 'vacuum'].flatMap((t) => ['open', 'close', 'check_part'].map((a) => `${t}/${a}`)));
   // A routines section that names its groups: only those.
   const only = { ...c, routines: { ...c.routines, groups: ['right'] } };
   const g2 = grantsFor(only, FEATURES, 'teacher');
   assert.ok(g2.subscribe.includes('/cell/manual/right/state'));
   assert.ok(!g2.subscribe.includes('/cell/manual/left/state'));
   assert.deepEqual(routines.view(cell.routines, 'admin', cell).tool_groups, { gripper: 'arm' });
+  // The cell file's titles of the tools' actions (per language), for the page to name them as the Manual page does.
+  assert.deepEqual(routines.view(cell.routines, 'admin', cell).action_titles['gripper/close'],
+    { en: 'Gripper close', es: 'Cerrar pinza', fi: 'Sulje tarttuja', de: 'Greifer schließen' });
+  const untitled = structuredClone(cell);
+  for (const a of untitled.manual.tools[0].actions) delete a.title;
+  assert.deepEqual(routines.view(untitled.routines, 'admin', untitled).action_titles, {});
 });

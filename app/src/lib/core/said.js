@@ -80,10 +80,11 @@ export function saidText(code, params, text, rename) {
  * @template T
  * @param {T} r
  * @param {string} [codeKey] @param {string} [paramsKey]
+ * @param {Rename} [rename]  how the page names a parameter (a cell-file name by its title in the user's language)
  * @returns {T}
  */
-export function localized(r, codeKey = 'code', paramsKey = 'params') {
+export function localized(r, codeKey = 'code', paramsKey = 'params', rename = undefined) {
   const v = /** @type {any} */ (r);
   if (!v || typeof v !== 'object' || typeof v[codeKey] !== 'string' || !v[codeKey] || typeof v.message !== 'string') return r;
-  return { ...v, message: saidText(v[codeKey], paramsOf(v[paramsKey]), v.message) };
+  return { ...v, message: saidText(v[codeKey], paramsOf(v[paramsKey]), v.message, rename) };
 }

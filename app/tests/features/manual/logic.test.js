@@ -74,6 +74,11 @@ describe('names', () => {
     expect(toolLabel('gripper', 'open')).toBe('Gripper open');
     expect(toolLabel('gripper', 'close')).toBe('Gripper close');
     expect(toolLabel('tool_changer', 'release_tool')).toBe('Tool changer release tool');
+    // The cell file's title of the action, in the user's language (manual.tools[].actions[].title).
+    const section = { tools: [{ name: 'gripper', actions: [{ name: 'close', title: { en: 'Close the gripper', de: 'Greifer schließen' } }, { name: 'open' }] }] };
+    expect(toolLabel('gripper', 'close', section)).toBe('Close the gripper');
+    expect(toolLabel('gripper', 'open', section)).toBe('Gripper open');
+    // (in German: said.test.js, which has a locale)
     expect(jogLabel('joint', 0, 1)).toBe('Jog joint 1 +');
     expect(jogLabel('joint', 5, -1)).toBe('Jog joint 6 -');
     expect(jogLabel('cartesian', 0, 1)).toBe('Jog X +');

@@ -1,6 +1,6 @@
 // The driver's state message in the user's language (a locale needs the browser-like environment, not node).
 import { describe, it, expect } from 'vitest';
-import { pickState } from '../../../src/lib/features/manual/logic.js';
+import { pickState, toolLabel } from '../../../src/lib/features/manual/logic.js';
 import { setLocale } from '../../../src/lib/paraglide/runtime.js';
 
 describe('the driver state\'s message', () => {
@@ -25,5 +25,18 @@ describe('the driver state\'s message', () => {
     } finally {
       setLocale('en', { reload: false });
     }
+  });
+});
+
+describe("a tool action's button", () => {
+  it("is the cell file's title in the user's language", () => {
+    const section = { tools: [{ name: 'gripper', actions: [{ name: 'close', title: { en: 'Close the gripper', de: 'Greifer schließen' } }] }] };
+    setLocale('de', { reload: false });
+    try {
+      expect(toolLabel('gripper', 'close', section)).toBe('Greifer schließen');
+    } finally {
+      setLocale('en', { reload: false });
+    }
+    expect(toolLabel('gripper', 'close', section)).toBe('Close the gripper');
   });
 });

@@ -1,6 +1,7 @@
+import { setLocale } from '../../../src/lib/paraglide/runtime.js';
 import { describe, it, expect } from 'vitest';
 import {
-  normalizeStep, stepText, removeStep, moveStep, nameProblem, routineView, routineSummary, runView, toolChoices, poseText,
+  normalizeStep, stepText, actionText, removeStep, moveStep, nameProblem, routineView, routineSummary, runView, toolChoices, poseText,
   toolsOfGroup, robotTopic, ROBOT_TYPE,
 } from '../../../src/lib/features/routines/logic.js';
 
@@ -11,6 +12,18 @@ describe('the draft', () => {
   it('names steps as the log does', () => {
     expect(stepText(pose)).toBe('Pose: x 412.3, y -120.0, z 230.5 mm');
     expect(stepText(close)).toBe('Gripper close');
+  });
+  it("names a tool action by the cell file's title in the user's language, as the Manual page's button does", () => {
+    const titles = { 'gripper/close': { en: 'Close the gripper', es: 'Cerrar la pinza' }, 'gripper/open': 'Open it' };
+    expect(stepText(close, titles)).toBe('Close the gripper');
+    expect(actionText('gripper', 'open', titles)).toBe('Open it');
+    expect(actionText('gripper', 'check_part', titles)).toBe('Gripper check_part');
+    setLocale('es', { reload: false });
+    try {
+      expect(stepText(close, titles)).toBe('Cerrar la pinza');
+    } finally {
+      setLocale('en', { reload: false });
+    }
   });
   it('deletes and reorders without touching the other steps', () => {
     const s = [pose, close, pose];

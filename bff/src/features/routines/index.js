@@ -23,6 +23,22 @@ function toolGroups(section, cell) {
   return out;
 }
 
+/**
+ * The cell file's titles of the section's tools' actions (manual.tools[].actions[].title), by "tool/action", so the
+ * page names an action as the Manual page's button does.
+ * @param {any} section @param {any} cell @returns {Record<string, unknown>}
+ */
+function actionTitles(section, cell) {
+  const tools = Array.isArray(cell?.manual?.tools) ? cell.manual.tools : [];
+  /** @type {Record<string, unknown>} */
+  const out = {};
+  for (const name of section?.tools || []) {
+    const t = tools.find((/** @type {any} */ x) => x?.name === name);
+    for (const a of Array.isArray(t?.actions) ? t.actions : []) if (a?.title) out[`${name}/${a.name}`] = a.title;
+  }
+  return out;
+}
+
 export default defineFeature({
   id: 'routines',
   title: 'Routines',
@@ -32,6 +48,7 @@ export default defineFeature({
     groups: groupsOf(section, cell),
     tools: section.tools || [],
     tool_groups: toolGroups(section, cell),
+    action_titles: actionTitles(section, cell),
   }),
   // The page shows the chosen group's live pose while teaching (its driver state) beside the routines node's names.
   reads: (section, cell) => ({

@@ -8,7 +8,7 @@
  */
 import { commandGate } from '../../core/gate.js';
 import { m } from '$lib/paraglide/messages.js';
-import { fmtFixed } from '../../core/i18n.js';
+import { cellText, fmtFixed } from '../../core/i18n.js';
 import { paramsOf, saidText } from '../../core/said.js';
 
 export const FEATURE_ID = 'manual';
@@ -200,9 +200,16 @@ export function humanize(s) {
   return t ? t[0].toUpperCase() + t.slice(1) : '';
 }
 
-/** The tool button's name: "Gripper open". @param {string} tool @param {string} action */
-export function toolLabel(tool, action) {
-  return `${humanize(tool)} ${String(action ?? '').replace(/[_-]+/g, ' ')}`.trim();
+/**
+ * The tool button's name: the cell file's title of the action in the user's language (manual.tools[].actions[].title),
+ * else "Gripper open" from the names.
+ * @param {string} tool @param {string} action @param {any} [section]  the cell file's manual section
+ */
+export function toolLabel(tool, action, section) {
+  const tools = Array.isArray(section?.tools) ? section.tools : [];
+  const actions = tools.find((/** @type {any} */ t) => t?.name === tool)?.actions;
+  const title = Array.isArray(actions) ? actions.find((/** @type {any} */ a) => a?.name === action)?.title : undefined;
+  return (title && cellText(title)) || `${humanize(tool)} ${String(action ?? '').replace(/[_-]+/g, ' ')}`.trim();
 }
 
 /**

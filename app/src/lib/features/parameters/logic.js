@@ -6,7 +6,7 @@
 
 import { m } from '$lib/paraglide/messages.js';
 import { cellText, getLocale } from '../../core/i18n.js';
-import { paramsOf, saidText } from '../../core/said.js';
+import { localized, paramsOf, saidText } from '../../core/said.js';
 
 export const FEATURE_ID = 'parameters';
 
@@ -243,8 +243,7 @@ export function fieldErrors(r, defs = []) {
  * @template T @param {T} r @param {ParamDef[]} defs @returns {T}
  */
 export function saidAnswer(r, defs) {
-  const v = /** @type {any} */ (r);
-  return v && typeof v === 'object' && typeof v.message === 'string' ? { ...v, message: said(v, defs) } : r;
+  return localized(r, 'code', 'params', labels(defs));
 }
 
 // ---- the local draft: an edit made offline (or not yet saved) survives a reload, to review and send later ----

@@ -5,7 +5,7 @@
  */
 
 import { m } from '$lib/paraglide/messages.js';
-import { fmtFixed } from '../../core/i18n.js';
+import { cellText, fmtFixed } from '../../core/i18n.js';
 import { paramsOf, saidText } from '../../core/said.js';
 
 export const FEATURE_ID = 'routines';
@@ -55,9 +55,19 @@ export function normalizeStep(s) {
 /** @param {number} x @param {number} [d] */
 const fixed = (x, d = 1) => (Number.isFinite(x) ? fmtFixed(x, d) : '?');
 
-/** "Pose: x 412.3, y -120.0, z 230.5 mm" or "Gripper close". @param {Step} s */
-export function stepText(s) {
-  if (s.kind === 'action') return `${capitalize(s.tool)} ${s.action}`.trim();
+/**
+ * A tool action as the Manual page's button names it: the cell file's title in the user's language (the routines
+ * view's `action_titles`, by "tool/action"), else "Gripper close".
+ * @param {string} tool @param {string} action @param {Record<string, any>} [titles]
+ */
+export function actionText(tool, action, titles) {
+  const title = titles && typeof titles === 'object' ? titles[`${tool}/${action}`] : undefined;
+  return (title && cellText(title)) || `${capitalize(tool)} ${action}`.trim();
+}
+
+/** "Pose: x 412.3, y -120.0, z 230.5 mm" or "Gripper close". @param {Step} s @param {Record<string, any>} [titles] */
+export function stepText(s, titles) {
+  if (s.kind === 'action') return actionText(s.tool, s.action, titles);
   const [x, y, z] = s.pose.map((v) => v * 1000);
   return m.routines_step_pose({ x: fixed(x), y: fixed(y), z: fixed(z) });
 }
