@@ -71,10 +71,11 @@ async function openLogin(page) {
     return u && b && !b.disabled && b.getBoundingClientRect().height > 0;
   }, null, { polling: 'raf', timeout: 60_000 });
   const usableMs = await page.evaluate(() => performance.now());
+  const fromWorker = await page.evaluate(() => !!navigator.serviceWorker?.controller);
   const decoded = await page.evaluate(() => performance.getEntriesByType('resource')
     .filter((e) => e.name.endsWith('.js')).reduce((s, e) => s + (/** @type {PerformanceResourceTiming} */ (e).decodedBodySize || 0), 0));
   await client.detach();
-  return { usableMs, scripts, decoded };
+  return { usableMs, scripts, decoded, fromWorker };
 }
 
 /** @param {string} locale */
@@ -88,15 +89,25 @@ async function measure(browser, locale) {
     const c = await openLogin(page);
     cold.push(c.usableMs);
     if (i === 0) bytes = { encoded: c.scripts.reduce((s, x) => s + x.encoded, 0), decoded: c.decoded, files: c.scripts.length };
-    // The service worker has taken the page over and precached the app: then open it again.
-    await page.waitForFunction(async () => {
-      const reg = await navigator.serviceWorker?.getRegistration();
-      return !!reg?.active && !!navigator.serviceWorker.controller;
-    }, null, { timeout: 120_000 });
-    await page.waitForFunction(async () => (await caches.keys()).length > 0 && (await Promise.all((await caches.keys()).map(async (k) => (await (await caches.open(k)).keys()).length))).some((n) => n > 10), null, { timeout: 120_000 });
+    // The service worker has taken the page over and precached the app (it activates once its precache is complete):
+    // then open it again. page.evaluate awaits the promise; waitForFunction would take the promise itself as truthy
+    // (so an async predicate passed at once, and the "warm" runs before this were opened before the worker was ready).
+    await page.evaluate(async () => {
+      await navigator.serviceWorker.ready;
+      if (!navigator.serviceWorker.controller) {
+        await new Promise((resolve) => navigator.serviceWorker.addEventListener('controllerchange', resolve, { once: true }));
+      }
+    });
+    const precached = await page.evaluate(async () => {
+      const counts = await Promise.all((await caches.keys()).map(async (k) => (await (await caches.open(k)).keys()).length));
+      return Math.max(0, ...counts);
+    });
+    if (precached < 10) throw new Error(`the service worker is active but precached only ${precached} files`);
     const again = await context.newPage();
     await page.close();
-    warm.push((await openLogin(again)).usableMs);
+    const w = await openLogin(again);
+    if (!w.fromWorker) throw new Error('the warm page was not served by the service worker');
+    warm.push(w.usableMs);
     await context.close();
   }
   return { cold, warm, bytes };
