@@ -130,6 +130,18 @@ describe("the node's refusals in the user's language (issue 29)", () => {
       setLocale('en', { reload: false });
     }
   });
+  it("says what is wrong with the CSV file in Spanish, each problem nested", () => {
+    const problem = { code: 'parameters.line_invalid', message: "line 4: Parts per cycle: 'x' is not a whole number; default 3 used",
+      params: { line: '4', why: whole.message, default: '3', ...nested('why', whole) } };
+    const got = { success: true, code: 'parameters.file_problems_one', message: `1 problem in parameters.csv: ${problem.message}`,
+      params: kv({ count: '1', file: 'parameters.csv', problems: problem.message, ...nested('problems', problem) }) };
+    setLocale('es', { reload: false });
+    try {
+      expect(saidAnswer(got, ds).message).toBe("1 problema en parameters.csv: línea 4: Parts per cycle: 'x' no es un número entero; se usa el valor por defecto 3");
+    } finally {
+      setLocale('en', { reload: false });
+    }
+  });
   it("keeps the node's English where there is no code, and says the English the node said", () => {
     expect(fieldErrors(answer, ds)).toEqual({ approach_height: above.message, parts: whole.message });
     expect(saidAnswer(answer, ds).message).toBe(answer.message);

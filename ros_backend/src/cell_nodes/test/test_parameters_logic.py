@@ -250,6 +250,16 @@ def test_invalid_values_and_unknown_ids_are_reported_and_defaults_used(tmp_path:
     ]
     assert s.message.startswith("9 problems in parameters.csv: line 2: Approach height")
     assert path.read_text(encoding="utf-8").startswith("\ufeffId , Value")  # not rewritten at start
+    # Said with codes (issue 29): the Parameters page says the file's problems in the user's language, each nested.
+    assert [p.code for p in s.problems] == ["parameters.line_invalid", "parameters.line_unknown",
+                                            "parameters.line_invalid", "parameters.line_again",
+                                            "parameters.line_no_value", "parameters.line_no_id",
+                                            *["parameters.not_in_file"] * 3]
+    assert dict(s.problems[0].params)["why.code"] == "parameters.above_max"
+    assert dict(s.problems[0].params)["default.code"] == "parameters.quantity"
+    assert s.message.code == "parameters.file_problems"
+    for text in [*s.problems, s.message]:
+        check_said(text)
 
 
 def test_multi_line_values_are_numbered_by_their_first_line(tmp_path: Path) -> None:
@@ -272,6 +282,7 @@ def test_corrupt_files_never_crash(tmp_path: Path, content: bytes, problem: str)
     s = store(tmp_path)
     assert s.texts == {d.id: d.default for d in s.defs}
     assert len(s.problems) == 1 and s.problems[0].startswith(problem), s.problems
+    check_said(s.message)   # "1 problem in …", the problem nested
     assert (tmp_path / "parameters.csv").read_bytes() == content  # kept for a person to look at
 
 

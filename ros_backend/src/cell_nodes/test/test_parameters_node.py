@@ -28,6 +28,7 @@ class Values:
         from cell_msgs.msg import ParameterValues
         self.history: list[dict[str, str]] = []
         self.messages: list[str] = []
+        self.codes: list[str] = []
         self._lock = threading.Lock()
         self.sub = rospy.Subscriber("/cell/parameters/values", ParameterValues, self._cb, queue_size=20)
 
@@ -35,6 +36,7 @@ class Values:
         with self._lock:
             self.history.append({p.id: p.value for p in msg.parameters})
             self.messages.append(msg.message)
+            self.codes.append(msg.code)
 
     def last(self) -> dict[str, str]:
         with self._lock:
@@ -129,6 +131,9 @@ def test_get_set_refuse_hand_edit_and_restart(data_dir: Path) -> None:
         assert reply.message == ("1 problem in parameters.csv: line 4: Gripper type: 'suction' is not one of "
                                  "parallel, vacuum, magnetic; default 'parallel' used")
         wait_for(lambda: values.messages[-1] == reply.message, 5, what="the problem on the topic")
+        # said with a code on both, the problem nested (issue 29)
+        assert reply.code == values.codes[-1] == "parameters.file_problems_one"
+        assert {kv.key: kv.value for kv in reply.params}["problems.why.code"] == "parameters.not_option"
         assert {p.id: p.value for p in reply.parameters}["gripper_type"] == "parallel"
     finally:
         first.stop()

@@ -20,6 +20,7 @@ import tempfile
 from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
+from ..said import say
 from .values import InvalidValue, ParamDef, canonical, show_value
 
 COLUMNS = ("id", "value", "unit", "category", "label")
@@ -34,6 +35,10 @@ class LoadResult:
     missing: bool = False                               # the file does not exist
 
 
+def _unreadable(name: str, why: str) -> str:
+    return say("parameters.file_unreadable", "cannot read {file}: {why}; every default used", file=name, why=why)
+
+
 def read_csv(path: str, defs: Sequence[ParamDef], name: str) -> LoadResult:
     """Read `path` (`name` is how messages call it); never raises for what is in or around the file."""
     result = LoadResult({d.id: d.default for d in defs})
@@ -42,13 +47,14 @@ def read_csv(path: str, defs: Sequence[ParamDef], name: str) -> LoadResult:
             raw = f.read(MAX_FILE_BYTES + 1)
     except FileNotFoundError:
         result.missing = True
-        result.problems.append(f"{name} does not exist: every default used")
+        result.problems.append(say("parameters.file_missing", "{file} does not exist: every default used", file=name))
         return result
     except OSError as e:
-        result.problems.append(f"cannot read {name}: {e.strerror or e}; every default used")
+        result.problems.append(_unreadable(name, e.strerror or str(e)))
         return result
     if len(raw) > MAX_FILE_BYTES:
-        result.problems.append(f"{name} is larger than {MAX_FILE_BYTES} bytes: not read; every default used")
+        result.problems.append(say("parameters.file_too_large", "{file} is larger than {max} bytes: not read; every "
+                                   "default used", file=name, max=MAX_FILE_BYTES))
         return result
     try:
         rows = csv.reader(io.StringIO(raw.decode("utf-8-sig"), newline=""))
@@ -58,15 +64,16 @@ def read_csv(path: str, defs: Sequence[ParamDef], name: str) -> LoadResult:
             table.append((end + 1, row))
             end = rows.line_num
     except (UnicodeDecodeError, csv.Error) as e:
-        result.problems.append(f"cannot read {name}: {e}; every default used")
+        result.problems.append(_unreadable(name, str(e)))
         return result
     table = [(line, row) for line, row in table if any(cell.strip() for cell in row)]  # blank lines mean nothing
     if not table:
-        result.problems.append(f"{name} is empty: every default used")
+        result.problems.append(say("parameters.file_empty", "{file} is empty: every default used", file=name))
         return result
     header = [cell.strip().lower() for cell in table[0][1]]
     if "id" not in header or "value" not in header:
-        result.problems.append(f"{name} has no header line with `id` and `value` columns: every default used")
+        result.problems.append(say("parameters.file_no_header", "{file} has no header line with `id` and `value` "
+                                   "columns: every default used", file=name))
         return result
     id_col, value_col = header.index("id"), header.index("value")
     by_id = {d.id: d for d in defs}
@@ -74,28 +81,33 @@ def read_csv(path: str, defs: Sequence[ParamDef], name: str) -> LoadResult:
     for line, row in table[1:]:
         pid = row[id_col].strip() if id_col < len(row) else ""
         if not pid:
-            result.problems.append(f"line {line}: no id; ignored")
+            result.problems.append(say("parameters.line_no_id", "line {line}: no id; ignored", line=line))
             continue
         defn = by_id.get(pid)
         if defn is None:
-            result.problems.append(f"line {line}: unknown parameter {pid!r}; ignored")
+            result.problems.append(say("parameters.line_unknown", "line {line}: unknown parameter {id}; ignored",
+                                       line=line, id=repr(pid)))
             continue
         if pid in first_line:
-            result.problems.append(f"line {line}: {pid} again (first on line {first_line[pid]}); ignored")
+            result.problems.append(say("parameters.line_again", "line {line}: {id} again (first on line {first}); "
+                                       "ignored", line=line, id=pid, first=first_line[pid]))
             continue
         first_line[pid] = line
         default = show_value(defn, defn.default)
         if value_col >= len(row):
-            result.problems.append(f"line {line}: {defn.label}: no value; default {default} used")
+            result.problems.append(say("parameters.line_no_value", "line {line}: {label}: no value; default {default} "
+                                       "used", line=line, label=defn.label, default=default))
             continue
         try:
             result.texts[pid] = canonical(defn, row[value_col])[0]
         except InvalidValue as e:
-            result.problems.append(f"line {line}: {e}; default {default} used")
+            result.problems.append(say("parameters.line_invalid", "line {line}: {why}; default {default} used",
+                                       line=line, why=e.said, default=default))
     for defn in defs:
         if defn.id not in first_line:
-            result.problems.append(f"{defn.label} ({defn.id}) is not in {name}; default "
-                                   f"{show_value(defn, defn.default)} used")
+            result.problems.append(say("parameters.not_in_file", "{label} ({id}) is not in {file}; default {default} "
+                                       "used", label=defn.label, id=defn.id, file=name,
+                                       default=show_value(defn, defn.default)))
     return result
 
 

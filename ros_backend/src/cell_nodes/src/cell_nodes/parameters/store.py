@@ -88,8 +88,9 @@ class ParameterStore:
             try:
                 write_csv(self.path, render(self.defs, texts), self.backups)
             except OSError as e:
-                self.texts, self.problems = dict(texts), [f"could not create {self.name}: {e.strerror or e}; "
-                                                          "the values are not saved"]
+                self.texts, self.problems = dict(texts), [say("parameters.not_created", "could not create {file}: "
+                                                              "{why}; the values are not saved", file=self.name,
+                                                              why=e.strerror or str(e))]
                 self._signature, self._loaded = None, True
                 return notes
             notes.append(f"{self.name} did not exist: created from {creating_from}")
@@ -112,7 +113,11 @@ class ParameterStore:
         non-empty message as a warning)."""
         if not self.problems:
             return ""
-        return f"{_plural(len(self.problems), 'problem')} in {self.name}: {'; '.join(self.problems)}"
+        if len(self.problems) == 1:
+            return say("parameters.file_problems_one", "{count} problem in {file}: {problems}", count=1, file=self.name,
+                       problems=self.problems[0])
+        return say("parameters.file_problems", "{count} problems in {file}: {problems}", count=len(self.problems),
+                   file=self.name, problems=listed(self.problems))
 
     # ---------------------------------------------------------------------------------------------- writing
     def validate(self, changes: Sequence[tuple[str, str]]) -> tuple[dict[str, str], list[tuple[str, str]]]:
