@@ -13,6 +13,21 @@ describe('the draft', () => {
     expect(stepText(pose)).toBe('Pose: x 412.3, y -120.0, z 230.5 mm');
     expect(stepText(close)).toBe('Gripper close');
   });
+  it("says why a saved routine cannot be read or run in the user's language", () => {
+    const raw = { name: 'a broken', error: 'a broken.json: the file is not valid JSON (Expecting value at line 1, column 1)',
+      error_code: 'routines.file_problem', error_params: [
+        { key: 'file', value: 'a broken.json' }, { key: 'why', value: 'the file is not valid JSON (Expecting value at line 1, column 1)' },
+        { key: 'why.code', value: 'routines.file_not_json' }, { key: 'why.why', value: 'Expecting value' },
+        { key: 'why.line', value: '1' }, { key: 'why.column', value: '1' }] };
+    expect(routineSummary(routineView(raw))).toBe(raw.error);
+    expect(routineSummary(routineView({ name: 'old', error: 'said by an older robot PC' }))).toBe('said by an older robot PC');
+    setLocale('es', { reload: false });
+    try {
+      expect(routineSummary(routineView(raw))).toBe('a broken.json: el archivo no es JSON válido (Expecting value en la línea 1, columna 1)');
+    } finally {
+      setLocale('en', { reload: false });
+    }
+  });
   it("names a tool action by the cell file's title in the user's language, as the Manual page's button does", () => {
     const titles = { 'gripper/close': { en: 'Close the gripper', es: 'Cerrar la pinza' }, 'gripper/open': 'Open it' };
     expect(stepText(close, titles)).toBe('Close the gripper');

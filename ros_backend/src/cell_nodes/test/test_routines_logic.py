@@ -239,6 +239,8 @@ def test_decode_says_what_is_wrong_with_a_file(data: bytes, error: str) -> None:
     with pytest.raises(RoutineError) as e:
         decode("x", data)
     assert str(e.value) == error
+    check_said(e.value.args[0])   # said with a code, in every catalogue
+    assert e.value.args[0].code.startswith("routines.file_")
 
 
 def test_format_pose() -> None:
@@ -369,6 +371,13 @@ def test_a_corrupt_file_is_listed_with_its_error_and_the_others_still_load(tmp_p
     assert by_name["D"].error == ""
     assert by_name["e unreadable"].error == "cannot read e unreadable.json: Permission denied"
     assert by_name["f dangling"].error == "f dangling.json is a link to nothing"
+    # Said with codes (issue 29): the Routines page says why in the user's language, the cause nested.
+    assert [by_name[n].error.code for n in ("a broken", "c old tool", "e unreadable", "f dangling")] == [
+        "routines.file_problem", "routines.not_runnable", "routines.file_unreadable", "routines.file_dangling"]
+    assert dict(by_name["a broken"].error.params)["why.code"] == "routines.file_not_json"
+    for x in found:
+        if x.error:
+            check_said(x.error)
     assert r.run("a broken")[1].startswith("routine a broken cannot run: a broken.json: the file is not valid JSON")
     assert r.run("c old tool") == (False, "routine c old tool cannot run with this cell file: step 1: unknown tool "
                                           "'drill' for routines (routines.tools: gripper)")

@@ -124,7 +124,8 @@ export function routineView(r) {
     tool: String(r?.tool ?? ''),
     steps: Array.isArray(r?.steps) ? r.steps.map(normalizeStep) : [],
     modified: Number.isFinite(secs) && secs > 0 ? secs * 1000 : null,
-    error: String(r?.error ?? ''),
+    // Why the file cannot be read or run, in the user's language (the node's English without a code).
+    error: saidText(String(r?.error_code ?? ''), paramsOf(r?.error_params), String(r?.error ?? '')),
   };
 }
 

@@ -212,30 +212,32 @@ def decode(name: str, data: bytes, modified: float = 0.0) -> Routine:
     try:
         doc = json.loads(data.decode("utf-8"))
     except UnicodeDecodeError:
-        raise RoutineError("the file is not UTF-8 text") from None
+        raise RoutineError(say("routines.file_not_utf8", "the file is not UTF-8 text")) from None
     except json.JSONDecodeError as e:
-        raise RoutineError(f"the file is not valid JSON ({e.msg} at line {e.lineno}, column {e.colno})") from None
+        raise RoutineError(say("routines.file_not_json", "the file is not valid JSON ({why} at line {line}, column "
+                               "{column})", why=e.msg, line=e.lineno, column=e.colno)) from None
     if not isinstance(doc, dict):
-        raise RoutineError("the file is not a routine (expected a JSON object)")
+        raise RoutineError(say("routines.file_not_object", "the file is not a routine (expected a JSON object)"))
     if doc.get("version") != FORMAT_VERSION:
-        raise RoutineError(f"unsupported routine file version {doc.get('version')!r} (this node reads "
-                           f"{FORMAT_VERSION})")
+        raise RoutineError(say("routines.file_version", "unsupported routine file version {version} (this node reads "
+                               "{supported})", version=repr(doc.get("version")), supported=FORMAT_VERSION))
     group, tool, raw_steps = doc.get("group"), doc.get("tool", ""), doc.get("steps")
     if not isinstance(group, str) or not isinstance(tool, str):
-        raise RoutineError("the file's group and tool must be text")
+        raise RoutineError(say("routines.file_group_tool", "the file's group and tool must be text"))
     if not isinstance(raw_steps, list):
-        raise RoutineError("the file has no list of steps")
+        raise RoutineError(say("routines.file_no_steps", "the file has no list of steps"))
     steps: list[Step] = []
     for i, raw in enumerate(raw_steps, 1):
         if not isinstance(raw, dict):
-            raise RoutineError(f"step {i} in the file is not an object")
+            raise RoutineError(say("routines.file_step_not_object", "step {step} in the file is not an object", step=i))
         pose, joints = raw.get("pose", []), raw.get("joints", [])
         s_tool, action = raw.get("tool", ""), raw.get("action", "")
         if not isinstance(pose, list) or not isinstance(joints, list) or not isinstance(s_tool, str) \
                 or not isinstance(action, str) or not isinstance(raw.get("kind"), str):
-            raise RoutineError(f"step {i} in the file has fields of the wrong type")
+            raise RoutineError(say("routines.file_step_types", "step {step} in the file has fields of the wrong type",
+                                   step=i))
         try:
             steps.append(_step_shape(Step(raw["kind"], tuple(pose), tuple(joints), s_tool, action), None))
         except RoutineError as e:
-            raise RoutineError(f"step {i} in the file: {e}") from None
+            raise RoutineError(say("routines.file_step", "step {step} in the file: {why}", step=i, why=said_of(e))) from None
     return Routine(name, group, tool, tuple(steps), modified)

@@ -10,7 +10,7 @@ import tempfile
 from typing import Optional
 
 from ..said import Said, say
-from .model import Routine, RoutineError, check_name, decode, encode, name_problem
+from .model import Routine, RoutineError, check_name, decode, encode, name_problem, said_of
 
 SUFFIX = ".json"
 TEMP_PREFIX = ".tmp-"          # a leading dot: never a routine name, so never listed
@@ -62,7 +62,8 @@ class RoutineStore:
                 out.append(self.read(name))
             except RoutineError:
                 if os.path.lexists(self.path(name)):  # a dangling link; a file deleted meanwhile is simply gone
-                    out.append(Routine(name, error=f"{name}{SUFFIX} is a link to nothing"))
+                    out.append(Routine(name, error=say("routines.file_dangling", "{file} is a link to nothing",
+                                                       file=name + SUFFIX)))
         return out
 
     def read(self, name: str) -> Routine:
@@ -71,20 +72,24 @@ class RoutineStore:
         try:
             st = os.stat(path)
             if not os.path.isfile(path):
-                return Routine(name, modified=st.st_mtime, error=f"{name}{SUFFIX} is not a regular file")
+                return Routine(name, modified=st.st_mtime, error=say("routines.file_not_regular",
+                                                                     "{file} is not a regular file", file=name + SUFFIX))
             if st.st_size > MAX_FILE_BYTES:
                 return Routine(name, modified=st.st_mtime,
-                               error=f"{name}{SUFFIX} is too large ({st.st_size} bytes, at most {MAX_FILE_BYTES})")
+                               error=say("routines.file_too_large", "{file} is too large ({size} bytes, at most {max})",
+                                         file=name + SUFFIX, size=st.st_size, max=MAX_FILE_BYTES))
             with open(path, "rb") as f:
                 data = f.read(MAX_FILE_BYTES + 1)
         except FileNotFoundError:
             raise RoutineError(no_such(name)) from None
         except OSError as e:
-            return Routine(name, error=f"cannot read {name}{SUFFIX}: {_why(e)}")
+            return Routine(name, error=say("routines.file_unreadable", "cannot read {file}: {why}", file=name + SUFFIX,
+                                           why=_why(e)))
         try:
             return decode(name, data, st.st_mtime)
         except RoutineError as e:
-            return Routine(name, modified=st.st_mtime, error=f"{name}{SUFFIX}: {e}")
+            return Routine(name, modified=st.st_mtime, error=say("routines.file_problem", "{file}: {why}",
+                                                                 file=name + SUFFIX, why=said_of(e)))
 
     # ---------------------------------------------------------------- writing
     def save(self, routine: Routine, overwrite: bool) -> bool:
