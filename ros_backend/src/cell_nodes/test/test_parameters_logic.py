@@ -368,6 +368,18 @@ def test_what_set_says_has_codes_the_app_can_say_nested_to_each_field(tmp_path: 
         check_said(text)
 
 
+def test_a_file_of_many_bad_lines_gives_a_short_message_and_every_problem(tmp_path: Path) -> None:
+    """The message lists ten problems and says how many more (it nests once per problem: 2000 would make megabytes
+    of parameters); `problems` (the node logs each) keeps them all."""
+    rows = "".join(f"ghost{i},1\n" for i in range(2000))
+    (tmp_path / "parameters.csv").write_text("id,value\n" + rows, encoding="utf-8")
+    s = store(tmp_path)
+    assert len(s.problems) == 2000 + len(s.defs)
+    assert s.message.endswith(f"; and {len(s.problems) - 10} more")
+    assert len(s.message.params) < 100 and len(s.message) < 1000
+    check_said(s.message)
+
+
 def test_set_backs_up_and_rotates(tmp_path: Path) -> None:
     s = store(tmp_path)
     path = tmp_path / "parameters.csv"

@@ -35,11 +35,18 @@ def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
 
 
+LISTED = 10   # a message lists at most this many (each nests once more: a file of 1000 bad lines must stay small)
+
+
 def listed(texts: Sequence[str]) -> str:
-    """Texts joined with "; ", said as nested pairs so each keeps its code (the app says each in the user's language)."""
-    if len(texts) == 1:
-        return texts[0]
-    return say("parameters.list", "{first}; {rest}", first=texts[0], rest=listed(texts[1:]))
+    """Texts joined with "; ", said as nested pairs so each keeps its code (the app says each in the user's language);
+    past LISTED, "and N more" (the log and `errors` have them all)."""
+    if len(texts) > LISTED:
+        texts = [*texts[:LISTED], say("parameters.more", "and {count} more", count=len(texts) - LISTED)]
+    out = texts[-1]
+    for text in reversed(texts[:-1]):
+        out = say("parameters.list", "{first}; {rest}", first=text, rest=out)
+    return out
 
 
 class ParameterStore:
