@@ -4,13 +4,17 @@ import { WebSocket } from 'ws';
 
 export const users = () => JSON.parse(process.env.E2E_USERS);
 
-/** @param {import('@playwright/test').Page} page @param {string} who a role of the cell file (its user is named after it) */
-export async function loginAs(page, who) {
-  await page.goto('/login');
+/**
+ * @param {import('@playwright/test').Page} page @param {string} who a role of the cell file (its user is named after it)
+ * @param {string} [next] the page to land on after signing in (default Home)
+ */
+export async function loginAs(page, who, next = '') {
+  await page.goto(next ? `/login?next=${encodeURIComponent(next)}` : '/login');
   await page.getByTestId('login-username').fill(who);
   await page.getByTestId('login-password').fill(users()[who]);
   await page.getByTestId('login-submit').click();
   await expect(page).not.toHaveURL(/\/login/);
+  if (next) await expect(page).toHaveURL((url) => url.pathname === next);
   await expect(page.getByTestId('page-title')).toBeVisible();
 }
 
