@@ -3,7 +3,7 @@
 import { test, expect } from '@playwright/test';
 import { sessionCookie, rosSocket } from '../lib/app.js';
 import { watchRobot } from '../lib/robot.js';
-import { jogMsg, openManual, expectStandstill, holdJog } from '../lib/manual.js';
+import { cell, jogMsg, openManual, expectStandstill, holdJog } from '../lib/manual.js';
 
 /** @type {import('../lib/robot.js').RobotWatch} */
 let robot;
@@ -44,4 +44,29 @@ test('one session holds control: another one\'s jog is refused; an admin take-ov
   } finally {
     await other.close();
   }
+});
+
+test('a page busy for longer than the lease timeout keeps control (its heartbeats do not wait for the page); a page hung for good loses it', async ({ page }) => {
+  await openManual(page);
+  await page.getByRole('button', { name: 'Take control' }).click();
+  await expect(page.getByTestId('lease-holder')).toContainText('You have control');
+  const timeoutMs = cell.control.heartbeat_timeout_s * 1000;
+  /** Keep the page's main thread busy, as a slow device laying out a page does. */
+  const busy = (/** @type {number} */ ms) => page.evaluate((ms) => {
+    const t = performance.now();
+    while (performance.now() - t < ms) { /* busy */ }
+  }, ms);
+  const serverView = () => page.evaluate(async () => (await fetch('/api/control', { cache: 'no-store' })).json());
+
+  await busy(timeoutMs + 2000);
+  expect((await serverView()).you).toBe(true);
+  await expect(page.getByTestId('lease-holder')).toContainText('You have control');
+  await expect(page.getByTestId('lease-lost')).toHaveCount(0);
+
+  // Hung for a lease timeout, the worker stops beating; one more, and the server ends the lease; the page says so
+  // when it wakes.
+  await busy(2 * timeoutMs + 3000);
+  await expect(page.getByTestId('lease-lost')).toContainText(/expired|no heartbeat/i);
+  expect((await serverView()).you).toBe(false);
+  await expect(page.getByRole('button', { name: 'Jog joint 1 +', exact: true })).toBeDisabled();
 });

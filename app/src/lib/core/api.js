@@ -5,6 +5,8 @@
  * A refusal's `error` is in the user's language when the BFF gave its code (core/errors.js).
  */
 
+import { fetchJson } from './fetch-json.js';
+
 /**
  * @typedef {{ kind: 'ok', status: number, data: any }
  *   | { kind: 'unauthorized', status: 401, error: string, data?: any }
@@ -23,32 +25,22 @@
  * @returns {Promise<ApiResult>}
  */
 export async function request(method, path, body, fetchImpl = globalThis.fetch, timeoutMs = 0) {
-  /** @type {RequestInit} */
-  const init = {
-    method,
-    credentials: 'same-origin',
-    headers: { Accept: 'application/json' },
-    cache: 'no-store',
-  };
-  if (body !== undefined) {
-    init.headers = { ...init.headers, 'Content-Type': 'application/json' };
-    init.body = JSON.stringify(body);
-  }
-  if (timeoutMs > 0) init.signal = AbortSignal.timeout(timeoutMs);
-  let res;
-  try {
-    res = await fetchImpl(path, init);
-  } catch (e) {
-    // fetch only rejects on network failure (offline, server down, CORS) or our timeout: not an auth answer.
-    if (e instanceof Error && e.name === 'TimeoutError') return { kind: 'offline', error: `no answer within ${timeoutMs / 1000} s` };
-    return { kind: 'offline', error: e instanceof Error ? e.message : String(e) };
-  }
-  const data = await readJson(res);
-  if (res.ok) return { kind: 'ok', status: res.status, data };
-  const error = (await sayError(data)) || res.statusText || `HTTP ${res.status}`;
-  if (res.status === 401) return { kind: 'unauthorized', status: 401, error, data };
-  if (res.status === 403) return { kind: 'forbidden', status: 403, error, data };
-  return { kind: 'error', status: res.status, error, data };
+  return resultOf(await fetchJson(method, path, body, fetchImpl, timeoutMs));
+}
+
+/**
+ * What an answer means to the app (a refusal's text in the user's language).
+ * @param {import('./fetch-json.js').RawAnswer} a
+ * @returns {Promise<ApiResult>}
+ */
+export async function resultOf(a) {
+  if ('offline' in a) return { kind: 'offline', error: a.offline };
+  const { status, data } = a;
+  if (status >= 200 && status < 300) return { kind: 'ok', status, data };
+  const error = (await sayError(data)) || a.statusText || `HTTP ${status}`;
+  if (status === 401) return { kind: 'unauthorized', status: 401, error, data };
+  if (status === 403) return { kind: 'forbidden', status: 403, error, data };
+  return { kind: 'error', status, error, data };
 }
 
 /**
@@ -66,17 +58,6 @@ async function sayError(data) {
     }
   }
   return data && typeof data.error === 'string' ? data.error : '';
-}
-
-/** @param {Response} res */
-async function readJson(res) {
-  if (res.status === 204) return null;
-  try {
-    const text = await res.text();
-    return text ? JSON.parse(text) : null;
-  } catch {
-    return null;
-  }
 }
 
 export const api = {

@@ -6,6 +6,7 @@
  * The server drops a lease after 2 s without a heartbeat, so while we hold it we heartbeat every
  * 500 ms; otherwise, while someone shows the lease (watch()), we poll every 1.5 s. A heartbeat gives up after
  * half the timeout: one request that hangs (a stalled connection) must not hold back the next until the lease is gone.
+ * In the browser the heartbeats go from a worker (lease-beat.js), so a page busy for a moment keeps its control.
  * Losing the lease (taken over, expired, server unreachable) leaves a notice in `lost` until dismissed
  * or control is taken again. A BFF that restarts within the timeout gives the lease back to its holder
  * (holder.resumed_at): that leaves a notice in `kept`; one that was back too late answers the heartbeat
@@ -14,8 +15,12 @@
  */
 
 import { m } from '$lib/paraglide/messages.js';
-import { api as defaultApi } from './api.js';
+import { api as defaultApi, resultOf } from './api.js';
 import { session } from './session.svelte.js';
+import { HeartbeatLoop } from './lease-beat.js';
+
+/** @typedef {import('./api.js').ApiResult} ApiResult */
+/** @typedef {import('./lease-beat.js').Beater<ApiResult>} LeaseBeater */
 
 /** @typedef {{ username: string, role: string, since?: string }} LeaseHolder */
 /** @typedef {{ reason: string, at: number }} LostNotice */
@@ -57,6 +62,8 @@ export class ControlLease {
   #epoch = 0;
   // Until when we go on heartbeating after losing control to an unreachable server (0: not reclaiming).
   #reclaimUntil = 0;
+  // What the beater was started for (epoch and timing), '' while it is stopped.
+  #beatKey = '';
 
   /**
    * @param {object} [o]
@@ -70,6 +77,7 @@ export class ControlLease {
    * @param {(fn: () => void, ms: number) => any} [o.setTimer]
    * @param {(t: any) => void} [o.clearTimer]
    * @param {() => void} [o.onUnauthorized]  the session ended (401)
+   * @param {LeaseBeater | null} [o.beater]  sends the heartbeats (default: from this thread, on setTimer)
    */
   constructor(o = {}) {
     this.api = o.api ?? defaultApi;
@@ -82,6 +90,13 @@ export class ControlLease {
     this.setTimer = o.setTimer ?? ((fn, ms) => setTimeout(fn, ms));
     this.clearTimer = o.clearTimer ?? ((t) => clearTimeout(t));
     this.onUnauthorized = o.onUnauthorized ?? (() => {});
+    /** @type {LeaseBeater} */
+    this.beater = o.beater ?? new HeartbeatLoop({
+      send: (ms) => this.api.controlHeartbeat(ms),
+      setTimer: this.setTimer,
+      clearTimer: this.clearTimer,
+      now: this.now,
+    });
   }
 
   /**
@@ -196,6 +211,7 @@ export class ControlLease {
     this.#reclaimUntil = 0;
     if (this.#timer !== null) this.clearTimer(this.#timer);
     this.#timer = null;
+    this.#stopBeating();
     this.#watchers = 0;
     this.holder = null;
     this.you = false;
@@ -237,11 +253,35 @@ export class ControlLease {
     return this.#reclaimUntil > 0 && this.now() <= this.#reclaimUntil;
   }
 
-  async #heartbeat() {
+  /** Heartbeats go while we hold control or ask whether we still do; a take, a release or a new timeout restarts them. */
+  #syncBeat() {
+    if (!(this.#you || this.#reclaiming())) {
+      this.#stopBeating();
+      return;
+    }
     const epoch = this.#epoch;
-    const reclaiming = !this.#you;
-    const r = await this.api.controlHeartbeat(this.heartbeatTimeoutMs);
+    const key = `${epoch}/${this.heartbeatMs}/${this.timeoutMs}`;
+    if (key === this.#beatKey) return;
+    this.#beatKey = key;
+    // A page that has not taken an answer for a whole lease timeout is hung: its heartbeats stop (lease-beat.js).
+    const o = { intervalMs: this.heartbeatMs, timeoutMs: this.heartbeatTimeoutMs, stallMs: this.timeoutMs };
+    this.beater.start(o, (r) => {
+      this.#onBeat(r, epoch);
+      this.#schedule();
+    });
+  }
+
+  #stopBeating() {
+    if (!this.#beatKey) return;
+    this.#beatKey = '';
+    this.beater.stop();
+  }
+
+  /** A heartbeat's answer. @param {ApiResult} r @param {number} epoch when it was started */
+  #onBeat(r, epoch) {
     if (epoch !== this.#epoch || !(this.#you || this.#reclaiming())) return;
+    this.beater.ack();
+    const reclaiming = !this.#you;
     if (r.kind === 'ok') {
       this.reachable = true;
       this.#lastOk = this.now();
@@ -292,8 +332,7 @@ export class ControlLease {
     if (this.#inflight) return;
     this.#inflight = true;
     try {
-      if (this.#you || this.#reclaiming()) await this.#heartbeat();
-      else if (this.#watchers > 0) await this.refresh();
+      if (!(this.#you || this.#reclaiming()) && this.#watchers > 0) await this.refresh();
     } catch {
       /* the API client does not throw; keep the loop alive anyway */
     } finally {
@@ -303,14 +342,63 @@ export class ControlLease {
   }
 
   #schedule() {
+    if (this.#reclaimUntil > 0 && !this.#reclaiming()) this.#reclaimUntil = 0;
+    this.#syncBeat();
     if (this.#inflight) return; // #tick schedules when its request is answered
     if (this.#timer !== null) this.clearTimer(this.#timer);
     this.#timer = null;
-    if (this.#reclaimUntil > 0 && !this.#reclaiming()) this.#reclaimUntil = 0;
-    const ms = this.#you || this.#reclaimUntil > 0 ? this.heartbeatMs : this.#watchers > 0 ? this.pollMs : 0;
-    if (ms) this.#timer = this.setTimer(() => this.#tick(), ms);
+    const beating = this.#you || this.#reclaimUntil > 0;
+    if (!beating && this.#watchers > 0) this.#timer = this.setTimer(() => this.#tick(), this.pollMs);
   }
 }
 
+/**
+ * Heartbeats from a dedicated worker (lease-worker.js), their answers read here; null where the browser has no
+ * module workers (the lease then beats from the page). A worker that fails to load hands over to the page.
+ * @returns {LeaseBeater | null}
+ */
+export function workerBeater() {
+  if (typeof Worker === 'undefined') return null;
+  /** @type {Worker} */
+  let worker;
+  try {
+    worker = new Worker(new URL('./lease-worker.js', import.meta.url), { type: 'module' });
+  } catch {
+    return null;
+  }
+  let gen = 0;
+  /** @type {{ o: import('./lease-beat.js').BeatOptions, onAnswer: (r: ApiResult) => void } | null} */
+  let current = null;
+  /** @type {HeartbeatLoop<ApiResult> | null} */
+  let fallback = null;
+  worker.onmessage = async (e) => {
+    if (e.data?.gen !== gen || !current) return;
+    const { onAnswer } = current;
+    const r = await resultOf(e.data.answer);
+    if (e.data.gen === gen) onAnswer(r);
+  };
+  worker.onerror = () => {
+    if (fallback) return;
+    fallback = new HeartbeatLoop({ send: (ms) => defaultApi.controlHeartbeat(ms) });
+    if (current) fallback.start(current.o, current.onAnswer);
+  };
+  return {
+    start(o, onAnswer) {
+      current = { o, onAnswer };
+      if (fallback) fallback.start(o, onAnswer);
+      else worker.postMessage({ start: o, gen: ++gen });
+    },
+    stop() {
+      current = null;
+      gen++;
+      if (fallback) fallback.stop();
+      else worker.postMessage({ stop: true });
+    },
+    ack() {
+      if (!fallback) worker.postMessage({ ack: true });
+    },
+  };
+}
+
 /** The app's lease view (the shell resets it on logout; lease bars watch it). */
-export const lease = new ControlLease({ onUnauthorized: () => session.expire() });
+export const lease = new ControlLease({ onUnauthorized: () => session.expire(), beater: workerBeater() });
