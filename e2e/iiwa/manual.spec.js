@@ -30,8 +30,7 @@ async function standstill() {
 
 /** @param {import('@playwright/test').Page} page */
 async function takeControl(page) {
-  await loginAs(page, 'admin');
-  await page.goto('/manual');
+  await loginAs(page, 'admin', '/manual');
   await page.getByRole('button', { name: 'Take control' }).click();
   await expect(page.getByTestId('lease-holder')).toContainText('You have control');
 }

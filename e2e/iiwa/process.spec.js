@@ -17,8 +17,7 @@ test('one cycle picks the cycle\'s cube with the vacuum cup and places it in its
   expect(base.slice(0, 2)).toEqual([0, 0]);
   const sim = await watchParts();
   try {
-    await loginAs(page, 'operator');
-    await page.goto('/process');
+    await loginAs(page, 'operator', '/process');
     const state = page.getByTestId('process-state');
     // Not running (Error when a run before this one ended in one: it shows until the next Start).
     await expect(state).toHaveText(/^(Idle|Error)$/, { timeout: 30_000 });

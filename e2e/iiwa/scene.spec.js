@@ -18,8 +18,7 @@ test('the 3D view draws the iiwa from its driver\'s URDF with its meshes, at its
   /** @type {string[]} */
   const meshes = [];
   page.on('response', (r) => { if (r.url().includes('/meshes/')) meshes.push(`${r.status()} ${r.url()}`); });
-  await loginAs(page, 'operator');
-  await page.goto('/scene');
+  await loginAs(page, 'operator', '/scene');
   const view = page.getByTestId('scene-view');
   await expect(view.getByRole('img', { name: /3D view/ })).toBeVisible();
   await expect.poll(async () => {

@@ -14,7 +14,6 @@ export const jogMsg = { group: arm.name, mode: 'joint', axis: 0, direction: 1, s
 
 /** @param {import('@playwright/test').Page} page @param {string} [who] */
 export async function openManual(page, who = 'admin') {
-  await loginAs(page, who);
-  await page.goto('/manual');
+  await loginAs(page, who, '/manual');
   await expect(page.getByTestId('page-title')).toHaveText(cell.pages.find((/** @type {any} */ p) => p.id === 'manual').title);
 }

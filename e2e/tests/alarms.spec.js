@@ -10,8 +10,7 @@ test.afterEach(async () => { await fault('reset'); });
 
 test('a device fault: banner and badge on every page, active on the Alarms page, inactive when cleared, gone after Reset', async ({ page }) => {
   test.slow();
-  await loginAs(page, 'admin');
-  await page.goto('/manual');
+  await loginAs(page, 'admin', '/manual');
   const banner = page.getByRole('alert').filter({ hasText: /gripper/i });
   await expect(banner).toHaveCount(0);
 

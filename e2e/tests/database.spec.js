@@ -72,8 +72,7 @@ test('replace from a USB drive, then from a file picked on the phone, then resto
 });
 
 test("a wrong extension: the server's refusal is shown as it came", async ({ page }) => {
-  await loginAs(page, 'admin');
-  await page.goto('/database');
+  await loginAs(page, 'admin', '/database');
   await page.getByRole('combobox', { name: 'USB drive' }).selectOption({ label: `${path.basename(drive)} (${drive})` });
   await page.getByRole('radio', { name: 'readme.txt' }).check();
   await page.getByRole('combobox', { name: 'Database file to replace' }).selectOption('parts.csv');

@@ -18,8 +18,7 @@ const ALARM = 'diagnostics.vision_camera_brightness';
 test('a module node killed: its diagnostics go stale and raise the alarm; started again, the alarm clears', async ({ page }) => {
   test.slow();
   let monitor = null;
-  await loginAs(page, 'admin');
-  await page.goto('/modules');
+  await loginAs(page, 'admin', '/modules');
   const card = page.locator(`[data-testid="module"][data-module="${vision.name}"]`);
   try {
     await expect(card).toHaveAttribute('data-state', 'inactive', { timeout: 15_000 });

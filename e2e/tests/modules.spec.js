@@ -19,8 +19,7 @@ const card = (page, name) => page.locator(`[data-testid="module"][data-module="$
 
 test('an admin launches a module (transitioning, then active), a node killed with kill -9 makes it incomplete, Stop makes it inactive', async ({ page }) => {
   test.slow();
-  await loginAs(page, 'admin');
-  await page.goto('/modules');
+  await loginAs(page, 'admin', '/modules');
   const c = card(page, multi.name);
   await expect(c).toHaveAttribute('data-state', 'inactive', { timeout: 15_000 });
   // Every state the card goes through, seen by the page itself (a poll could miss a short one).
@@ -52,8 +51,7 @@ test('an admin launches a module (transitioning, then active), a node killed wit
 });
 
 test('an operator sees only the modules its role may launch, and cannot launch another one through /ros', async ({ page, context, baseURL }) => {
-  await loginAs(page, 'operator');
-  await page.goto('/modules');
+  await loginAs(page, 'operator', '/modules');
   await expect(page.getByTestId('module')).toHaveCount(forOperator.length);
   for (const name of forOperator) await expect(card(page, name)).toBeVisible();
   await expect(page.getByRole('button', { name: `Launch ${adminOnly.name}` })).toHaveCount(0);

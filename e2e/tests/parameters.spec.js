@@ -16,8 +16,7 @@ const csvValues = () => Object.fromEntries(fs.readFileSync(csvPath(), 'utf8').tr
 const field = (page, label) => page.getByRole('textbox', { name: label });
 
 test('an admin saves a parameter: the diff first, then the CSV has it and the page reads it back', async ({ page }) => {
-  await loginAs(page, 'admin');
-  await page.goto('/parameters');
+  await loginAs(page, 'admin', '/parameters');
   const height = field(page, 'Approach height (mm)');
   await expect(height).toHaveValue(/^\d/);
   const before = await height.inputValue();
@@ -37,8 +36,7 @@ test('an admin saves a parameter: the diff first, then the CSV has it and the pa
 });
 
 test('an invalid value is refused in place with the field named, and by the node if sent anyway', async ({ page, context, baseURL }) => {
-  await loginAs(page, 'admin');
-  await page.goto('/parameters');
+  await loginAs(page, 'admin', '/parameters');
   const parts = field(page, 'Parts per cycle');
   await parts.fill('25');
   await expect(parts).toHaveAttribute('aria-invalid', 'true');
@@ -62,8 +60,7 @@ test('an invalid value is refused in place with the field named, and by the node
 });
 
 test('an edit made offline stays as a draft to review and send when back online', async ({ page, context }) => {
-  await loginAs(page, 'admin');
-  await page.goto('/parameters');
+  await loginAs(page, 'admin', '/parameters');
   const recipe = field(page, 'Recipe name');
   await expect(recipe).not.toHaveValue('');
   // A value the CSV does not hold yet (the phone's run saved its own before this profile's).
@@ -83,8 +80,7 @@ test('an edit made offline stays as a draft to review and send when back online'
 });
 
 test('an operator cannot open the parameters nor write them through /ros', async ({ page, context, baseURL }) => {
-  await loginAs(page, 'operator');
-  await page.goto('/parameters');
+  await loginAs(page, 'operator', '/parameters');
   await expect(page.getByTestId('access-denied')).toBeVisible();
   const ros = await rosSocket(/** @type {string} */ (baseURL), await sessionCookie(context));
   ros.send({ op: 'call_service', id: 'w', service: '/cell/parameters/set', args: { changes: [{ id: 'parts_per_cycle', value: '4' }] } });

@@ -31,8 +31,7 @@ async function clickStart(page) {
 
 test('an operator starts the process, pauses, resumes, stops and runs one operation, watching the log', async ({ page }) => {
   test.slow();
-  await loginAs(page, 'operator');
-  await page.goto('/process');
+  await loginAs(page, 'operator', '/process');
   const state = page.getByTestId('process-state');
   await expect(state).toHaveText(NOT_RUNNING, { timeout: 20_000 });
   await expect(page.getByRole('button', { name: 'Start', exact: true })).toBeDisabled();
@@ -79,8 +78,7 @@ test('an operator starts the process, pauses, resumes, stops and runs one operat
 });
 
 test('Start needs the lease, in the page and through /ros; Stop and Pause do not', async ({ page, context, baseURL }) => {
-  await loginAs(page, 'operator');
-  await page.goto('/process');
+  await loginAs(page, 'operator', '/process');
   const state = page.getByTestId('process-state');
   await expect(state).toHaveText(NOT_RUNNING, { timeout: 20_000 });
   const before = /** @type {string} */ (await state.textContent());

@@ -73,8 +73,7 @@ test('live graphs from the cell file, with legend, values and Pause / Resume per
 
 test('subscribed only while shown and visible: rosbridge leaves the topic when the app is hidden or the page is left', async ({ page }) => {
   test.slow();
-  await loginAs(page, 'operator');
-  await page.goto('/sensors');
+  await loginAs(page, 'operator', '/sensors');
   const wrench = page.getByTestId('sensor-graph').filter({ has: page.getByRole('heading', { name: 'Wrist wrench' }) });
   await expect.poll(() => draws(wrench)).toBeGreaterThan(0);
   await expect.poll(() => subscribers('/cell/wrench'), { timeout: 15_000 }).toContain(ROSBRIDGE);

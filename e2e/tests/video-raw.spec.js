@@ -31,8 +31,7 @@ test('a raw 720p camera reaches the viewer as JPEG at its element size; full scr
       if (m.op === 'subscribe') subscribed.push(m.topic);
     } catch { /* not JSON */ }
   }));
-  await loginAs(page, 'operator');
-  await page.goto('/video');
+  await loginAs(page, 'operator', '/video');
   await page.getByRole('radio', { name: NAME }).check();
   const camera = page.getByTestId('video');
   await expect(camera).toHaveAttribute('data-type', 'raw');
@@ -68,8 +67,7 @@ test('a raw 720p camera reaches the viewer as JPEG at its element size; full scr
 
 test('on a link too slow for the camera\'s frames the viewer asks smaller ones (lower quality first) and keeps showing live frames', async ({ page, context }) => {
   test.slow();
-  await loginAs(page, 'operator');
-  await page.goto('/video');
+  await loginAs(page, 'operator', '/video');
   await page.getByRole('radio', { name: NAME }).check();
   const camera = page.getByTestId('video');
   await expect(page.getByTestId('video-badge')).toHaveText('Live', { timeout: 30_000 });

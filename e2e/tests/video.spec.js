@@ -64,8 +64,7 @@ test('a stream whose frames stop is marked stale with its age', async ({ page })
       ws.send(m);
     });
   });
-  await loginAs(page, 'operator');
-  await page.goto('/video');
+  await loginAs(page, 'operator', '/video');
   await expect(page.getByTestId('video-badge')).toHaveText('Live', { timeout: 20_000 });
   dropFrames = true;
   await expect(page.getByTestId('video-status')).toHaveAttribute('data-state', 'stale', { timeout: 10_000 });
@@ -77,8 +76,7 @@ test('a stream whose frames stop is marked stale with its age', async ({ page })
 });
 
 test('full screen, pinch-zoom with two fingers, and Reset zoom', async ({ page, context }) => {
-  await loginAs(page, 'operator');
-  await page.goto('/video');
+  await loginAs(page, 'operator', '/video');
   await expect(page.getByRole('img', { name: 'Workbench camera image' })).toBeVisible({ timeout: 20_000 });
 
   await page.getByRole('button', { name: 'Full screen' }).click();

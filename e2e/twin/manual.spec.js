@@ -22,8 +22,7 @@ const moved = (before, now) => Math.max(...now.map((q, i) => Math.abs(q - before
 
 test('each arm is chosen first, jogs while held and stops on release; the other arm does not move', async ({ page }) => {
   expect(groups.length).toBeGreaterThan(1);
-  await loginAs(page, 'admin');
-  await page.goto('/manual');
+  await loginAs(page, 'admin', '/manual');
   const chooser = page.getByRole('radiogroup', { name: 'Motion group' });
   await expect(chooser).toBeVisible();
   await page.getByRole('button', { name: 'Take control' }).click();

@@ -18,8 +18,7 @@ test('one cycle hands the cycle\'s cube over from the left arm to the right arm 
   test.setTimeout(240_000);
   const sim = await watchParts();
   try {
-    await loginAs(page, 'operator');
-    await page.goto('/process');
+    await loginAs(page, 'operator', '/process');
     const state = page.getByTestId('process-state');
     // Not running (Error when a run before this one ended in one: it shows until the next Start).
     await expect(state).toHaveText(/^(Idle|Error)$/, { timeout: 30_000 });

@@ -18,8 +18,7 @@ test.afterAll(() => Object.values(arms).forEach((a) => a.close()));
 
 test('the 3D view shows both arms, each drawn at its own joint states, and the parts', async ({ page }) => {
   expect(groups.length).toBe(2);
-  await loginAs(page, 'operator');
-  await page.goto('/scene');
+  await loginAs(page, 'operator', '/scene');
   const view = page.getByTestId('scene-view');
   await expect(view.getByRole('img', { name: /3D view/ })).toBeVisible();
   for (const g of groups) {
@@ -36,8 +35,7 @@ test('the 3D view shows both arms, each drawn at its own joint states, and the p
 
 test('each arm stands where TF puts its base frame: where the simulated cell built it', async ({ page }) => {
   expect(cell.scene.fixed_frame).toBeTruthy();
-  await loginAs(page, 'operator');
-  await page.goto('/scene');
+  await loginAs(page, 'operator', '/scene');
   const view = page.getByTestId('scene-view');
   for (const arm of cell.scene.arms) {
     const sim = cell.simulation.arms.find((/** @type {any} */ a) => a.group === arm.group);
