@@ -69,7 +69,7 @@ if want catkin && { ! fresh catkin "$s" || [[ ! -f ros_backend/devel/setup.bash 
 fi
 
 # 5. the PWA build
-s=$( (find app/src app/static app/messages app/project.inlang -type f -not -path 'app/src/lib/paraglide/*' 2>/dev/null | sort | xargs cat; cat app/package.json app/vite.config.* app/svelte.config.* app/i18n.*.js 2>/dev/null) | sha256sum | cut -c1-16)
+s=$( (find app/src app/static app/messages app/project.inlang -type f -not -path 'app/src/lib/paraglide/*' 2>/dev/null | sort | xargs cat; cat app/package.json app/vite.config.* app/svelte.config.* app/i18n.*.js app/preload-fallback.js 2>/dev/null) | sha256sum | cut -c1-16)
 if want app && { ! fresh app "$s" || [[ ! -f app/build/index.html ]]; }; then
   log "building app"
   npm run build -w app --silent >"$STATE/app-build.log" 2>&1 || { tail -40 "$STATE/app-build.log" >&2; exit 1; }

@@ -123,3 +123,19 @@ test('the certificate trust page comes from the server even once the service wor
   await expect(page.locator('svg').first()).toBeVisible();
   await expect(page.getByTestId('not-found')).toHaveCount(0);
 });
+
+test('the login page comes with its own modules preloaded: no route module waits for the app to start', async ({ page }) => {
+  /** @type {string[]} */
+  const nodes = [];
+  page.on('request', (r) => {
+    const p = new URL(r.url()).pathname;
+    if (p.startsWith('/_app/immutable/nodes/')) nodes.push(p);
+  });
+  const res = await page.goto('/login');
+  await expect(page.getByTestId('login-username')).toBeEditable();
+  // The page as served (once running, Vite's loader adds preload links of its own for what it imports).
+  const served = [...(await res.text()).matchAll(/<link href="([^"]+)" rel="modulepreload">/g)].map((m) => m[1]);
+  // The root layout, the root error page and the login page: SvelteKit's fallback preloads only the first.
+  expect(nodes.length).toBeGreaterThanOrEqual(3);
+  expect(nodes.filter((n) => !served.includes(n))).toEqual([]);
+});

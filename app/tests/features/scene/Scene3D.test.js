@@ -21,7 +21,33 @@ describe('3D view', () => {
     expect(ros.subscribe).not.toHaveBeenCalled();
     expect(screen.getByRole('button', { name: 'Reset view' })).toHaveProperty('disabled', true);
     expect(screen.getByRole('table', { name: 'Joint values' })).toBeTruthy();
-  });
+  }, 20_000); // the first import of three.js: seconds on a busy 2-core machine
+});
+
+describe('3D view as a card', () => {
+  it('starts only once it comes near the screen (a phone\'s Home opens with it below the fold)', async () => {
+    /** @type {((entries: { isIntersecting: boolean }[]) => void)[]} */
+    const observers = [];
+    vi.stubGlobal('IntersectionObserver', class {
+      /** @param {(entries: { isIntersecting: boolean }[]) => void} cb */
+      constructor(cb) { observers.push(cb); }
+      observe() {}
+      disconnect() {}
+    });
+    try {
+      render(Scene3D, { section, compact: true });
+      expect(observers).toHaveLength(1);
+      // Off screen: nothing started (jsdom has no WebGL, so a started view would say so at once).
+      observers[0]([{ isIntersecting: false }]);
+      await new Promise((r) => setTimeout(r, 400));
+      expect(screen.queryByRole('alert')).toBeNull();
+      expect(screen.getByRole('status').textContent).toMatch(/Loading/);
+      observers[0]([{ isIntersecting: true }]);
+      expect(await screen.findByRole('alert', {}, { timeout: 10_000 })).toHaveProperty('textContent', expect.stringMatching(/cannot draw WebGL/));
+    } finally {
+      vi.unstubAllGlobals();
+    }
+  }, 20_000);
 });
 
 describe('move preview', () => {
