@@ -171,6 +171,8 @@ class RTDEConnection:
             if recipe.valid:
                 self.output = recipe
                 self.next_output_id += 1
+                # A controller's own log tells which client streams what: the rate is what costs the controller.
+                log.info("RTDE: output recipe %d, %d variables at %g Hz", recipe.id, len(names), 1.0 / recipe.period)
             else:
                 log.warning("RTDE: output recipe with unknown variables: %s",
                             [n for n, t in zip(names, recipe.types) if t == "NOT_FOUND"])

@@ -7,6 +7,7 @@ TCP speeds measured here are wall-clock figures.
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -45,9 +46,12 @@ def make_driver(host: str) -> ManualDriver:
     return d
 
 
+SIMS: dict[str, object] = {}  # the module's sim, for tests that read its log
+
+
 @pytest.fixture(scope="module")
 def cell() -> Iterator[tuple[ManualDriver, rtde_receive.RTDEReceiveInterface]]:
-    sim = start_sim(HOST, "--no-ros", "--no-cameras")
+    sim = SIMS[HOST] = start_sim(HOST, "--no-ros", "--no-cameras")
     driver = make_driver(HOST)
     watch = rtde_receive.RTDEReceiveInterface(HOST)
     try:
@@ -57,6 +61,13 @@ def cell() -> Iterator[tuple[ManualDriver, rtde_receive.RTDEReceiveInterface]]:
         watch.disconnect()
         sim.stop()
         assert "Traceback" not in sim.output(), sim.output()[-3000:]
+
+
+def test_the_driver_asks_for_the_state_no_faster_than_it_reads_it(cell) -> None:
+    """Each of the driver's clients streams at 125 Hz, its poll rate; the watch client (ur_rtde's default) at 500."""
+    out = SIMS[HOST].output()  # type: ignore[attr-defined]
+    rates = [float(r) for r in re.findall(r"RTDE: output recipe \d+, \d+ variables at ([\d.]+) Hz", out)]
+    assert sorted(rates) == [125.0] * (len(rates) - 1) + [500.0] and len(rates) >= 2, (rates, out[-2000:])
 
 
 def q_of(watch) -> np.ndarray:
