@@ -47,7 +47,7 @@ test('a named move arrives on all 7 joints, a joint jog stops on release, a rela
   await takeControl(page);
   for (const name of ['pick_approach', 'home']) {
     await moveNamed(page, name);
-    await expect(page.getByText(new RegExp(`arrived at ${name}`, 'i')).first()).toBeVisible({ timeout: 30_000 });
+    await expect(page.getByTestId('move-named-feedback')).toContainText(new RegExp(`arrived at ${name}`, 'i'), { timeout: 30_000 });
     await standstill();
     arm.joints().forEach((q, i) => expect(Math.abs(q - group.configurations[name][i]), `joint ${i + 1}`).toBeLessThan(0.01));
   }
@@ -79,7 +79,7 @@ test('a trajectory the controller aborts (the arm is blocked) fails the move wit
   test.slow();
   await takeControl(page);
   await moveNamed(page, 'home');
-  await expect(page.getByText(/arrived at home/i).first()).toBeVisible({ timeout: 30_000 });
+  await expect(page.getByTestId('move-named-feedback')).toContainText(/arrived at home/i, { timeout: 30_000 });
   await standstill();
   try {
     await fault('collision');
@@ -93,7 +93,7 @@ test('a trajectory the controller aborts (the arm is blocked) fails the move wit
   }
   // The next command clears the arm's fault: the move succeeds, the alarm is inactive and goes with Reset.
   await moveNamed(page, 'home');
-  await expect(page.getByText(/arrived at home/i).first()).toBeVisible({ timeout: 30_000 });
+  await expect(page.getByTestId('move-named-feedback')).toContainText(/arrived at home/i, { timeout: 30_000 });
   await page.goto('/alarms');
   const item = page.locator('[data-testid="alarm"][data-alarm="robot.arm.motion_fault"]');
   await expect(item).toHaveAttribute('data-active', 'false', { timeout: 10_000 });

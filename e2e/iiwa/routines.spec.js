@@ -45,7 +45,7 @@ test('a routine of two poses and a vacuum action is recorded, saved and replayed
   await expect(page.getByTestId('lease-holder')).toContainText('You have control');
   await page.getByRole('combobox', { name: 'Named configuration' }).selectOption('home');
   await page.getByRole('button', { name: 'Move to configuration' }).click();
-  await expect(page.getByText(/arrived at home/i).first()).toBeVisible({ timeout: 30_000 });
+  await expect(page.getByTestId('move-named-feedback')).toContainText(/arrived at home/i, { timeout: 30_000 });
   await standstill();
 
   await go(page, 'routines');

@@ -25,7 +25,7 @@ test('an admin takes control, moves to a named configuration, jogs, and the arm 
   else await expect(chooser).toHaveCount(0);
   await page.getByRole('combobox', { name: 'Named configuration' }).selectOption(String(name));
   await page.getByRole('button', { name: 'Move to configuration' }).click();
-  await expect(page.getByText(new RegExp(`arrived at ${name}`, 'i')).first()).toBeVisible({ timeout: 30_000 });
+  await expect(page.getByTestId('move-named-feedback')).toContainText(new RegExp(`arrived at ${name}`, 'i'), { timeout: 30_000 });
   robot.joints().forEach((q, i) => expect(Math.abs(q - /** @type {number[]} */ (target)[i])).toBeLessThan(0.01));
 
   await expect(jog).toBeEnabled();

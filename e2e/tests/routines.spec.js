@@ -50,7 +50,7 @@ test('an admin records two poses and a gripper action, runs the routine (both po
   await expect(page.getByTestId('lease-holder')).toContainText('You have control');
   await page.getByRole('combobox', { name: 'Named configuration' }).selectOption('home');
   await page.getByRole('button', { name: 'Move to configuration' }).click();
-  await expect(page.getByText(/arrived at home/i).first()).toBeVisible({ timeout: 30_000 });
+  await expect(page.getByTestId('move-named-feedback')).toContainText(/arrived at home/i, { timeout: 30_000 });
   await standstill(page);
 
   // Pose 1 where the arm is, then the gripper closing, then pose 2 after a move on the Manual page.

@@ -41,7 +41,7 @@ test('the 3D view beside the Manual controls follows the arm (within 0.01 rad af
   expect(maxDiff(target, here)).toBeGreaterThan(0.1);
   await page.getByRole('combobox', { name: 'Named configuration' }).selectOption(name);
   await page.getByRole('button', { name: 'Move to configuration' }).click();
-  await expect(page.getByText(new RegExp(`arrived at ${name}`, 'i')).first()).toBeVisible({ timeout: 30_000 });
+  await expect(page.getByTestId('move-named-feedback')).toContainText(new RegExp(`arrived at ${name}`, 'i'), { timeout: 30_000 });
   await expect.poll(async () => maxDiff(await drawn(panel), robot.joints()), { timeout: 5_000 }).toBeLessThan(0.01);
   expect(maxDiff(robot.joints(), target)).toBeLessThan(0.01);
   await expect(panel.getByTestId('scene-stale')).toHaveCount(0);

@@ -18,6 +18,7 @@ from typing import Callable, Optional, Sequence
 
 import actionlib
 import rospy
+from actionlib.action_client import ClientGoalHandle, CommState
 from actionlib_msgs.msg import GoalStatusArray
 from control_msgs.msg import FollowJointTrajectoryAction, FollowJointTrajectoryGoal, JointTolerance
 from sensor_msgs.msg import JointState
@@ -44,7 +45,11 @@ class RosTransport:
         self._status_at = -1e9
         self._inputs: dict[int, bool] = {}
         self._lock = threading.Lock()
-        self._client = actionlib.SimpleActionClient(spec.action, FollowJointTrajectoryAction)
+        # Not SimpleActionClient: it takes a goal's transitions as its own only once send_goal has returned, and drops
+        # the rest ("a goal handle that we're not tracking"); a short move's result can arrive before that, and the
+        # move then never ended. Here each goal's callback is bound to that goal.
+        self._client = actionlib.ActionClient(spec.action, FollowJointTrajectoryAction)
+        self._goal: Optional[ClientGoalHandle] = None  # the client tracks a goal only while its handle lives
         self._command = rospy.Publisher(spec.command, JointTrajectory, queue_size=1)
         self._subs = [rospy.Subscriber(spec.joint_states, JointState, self._on_joints, queue_size=1, tcp_nodelay=True),
                       rospy.Subscriber(f"{spec.action}/status", GoalStatusArray, self._on_status, queue_size=1)]
@@ -82,11 +87,14 @@ class RosTransport:
         goal.path_tolerance = [JointTolerance(name=n, position=path_tolerance) for n in names]
         goal.goal_time_tolerance = rospy.Duration.from_sec(goal_time_tolerance)
 
-        def on_done(state: int, result: object) -> None:
+        def on_transition(gh: ClientGoalHandle) -> None:
+            if gh.get_comm_state() != CommState.DONE:  # (DONE comes once: the goal's state machine stops there)
+                return
+            result = gh.get_result()
             code = int(getattr(result, "error_code", 0) or 0)
-            done(int(state), code, str(getattr(result, "error_string", "") or ""))
+            done(int(gh.get_goal_status()), code, str(getattr(result, "error_string", "") or ""))
 
-        self._client.send_goal(goal, done_cb=on_done)
+        self._goal = self._client.send_goal(goal, transition_cb=on_transition)
 
     def cancel_goal(self) -> None:
         self._client.cancel_all_goals()
