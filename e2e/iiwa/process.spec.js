@@ -1,5 +1,5 @@
 // The iiwa cell's process: one cycle picks a cube with the vacuum cup and puts it into its pocket of the fixture (cycle
-// N takes cube and pocket (N - 1) mod 3, so each profile's run moves the next cube), through the real page, BFF, process nodes, our driver's ros_control backend and the
+// N takes cube and pocket (N - 1) mod 3; the sim's feeder puts the cubes back first, so the spec runs again), through the real page, BFF, process nodes, our driver's ros_control backend and the
 // simulated iiwa driver. Where the cube ends up is read from outside the app: the sim's ground truth (/sim/objects).
 import fs from 'node:fs';
 import yaml from 'js-yaml';
@@ -21,6 +21,7 @@ test('one cycle picks the cycle\'s cube with the vacuum cup and places it in its
     const state = page.getByTestId('process-state');
     // Not running (Error when a run before this one ended in one: it shows until the next Start).
     await expect(state).toHaveText(/^(Idle|Error)$/, { timeout: 30_000 });
+    await sim.restock();
     await page.getByRole('button', { name: 'Take control' }).click();
     await expect(page.getByTestId('lease-holder')).toContainText('You have control');
     await page.getByRole('textbox', { name: 'Cycles' }).fill('1');

@@ -148,17 +148,25 @@ export async function watchTcp(group, url = process.env.E2E_ROSBRIDGE_URL || '')
 
 /**
  * The parts' world positions from the sim's ground truth (/sim/objects, 5 Hz; a real cell has no such topic), on
- * the stack's own rosbridge.
+ * the stack's own rosbridge; `restock` puts every part back where it lay at the start (the sim's feeder, /sim/restock),
+ * so a process spec can run again on the same stack (`--repeat-each`) with its cube away from its pocket.
  * @param {string} [url]
- * @returns {Promise<{ parts: () => {x: number, y: number, z: number}[], close: () => void }>}
+ * @returns {Promise<{ parts: () => {x: number, y: number, z: number}[], restock: () => Promise<void>, close: () => void }>}
  */
 export async function watchParts(url = process.env.E2E_ROSBRIDGE_URL || '') {
   const ws = new WebSocket(url);
   /** @type {{x: number, y: number, z: number}[]} */
   let parts = [];
+  /** @type {((m: any) => void) | null} */
+  let restocked = null;
+  let seen = 0;
   ws.on('message', (d) => {
     const m = JSON.parse(d.toString());
-    if (m.op === 'publish' && m.topic === '/sim/objects') parts = m.msg.poses.map((/** @type {any} */ p) => p.position);
+    if (m.op === 'publish' && m.topic === '/sim/objects') {
+      parts = m.msg.poses.map((/** @type {any} */ p) => p.position);
+      seen++;
+    }
+    if (m.op === 'service_response' && m.id === 'restock') restocked?.(m);
   });
   await new Promise((resolve, reject) => { ws.once('open', resolve); ws.once('error', reject); });
   ws.send(JSON.stringify({ op: 'subscribe', id: 'parts', topic: '/sim/objects', type: 'geometry_msgs/PoseArray' }));
@@ -167,7 +175,23 @@ export async function watchParts(url = process.env.E2E_ROSBRIDGE_URL || '') {
     if (Date.now() - first > 20_000) throw new Error('no /sim/objects from the simulated cell within 20 s');
     await new Promise((r) => setTimeout(r, 20));
   }
-  return { parts: () => parts, close: () => ws.close() };
+  const restock = async () => {
+    const answer = /** @type {any} */ (await new Promise((resolve, reject) => {
+      const timer = setTimeout(() => reject(new Error('/sim/restock did not answer within 10 s')), 10_000);
+      restocked = (m) => { clearTimeout(timer); resolve(m); };
+      ws.send(JSON.stringify({ op: 'call_service', id: 'restock', service: '/sim/restock' }));
+    }));
+    if (answer.result !== true || answer.values?.success !== true) throw new Error(`/sim/restock: ${JSON.stringify(answer.values)}`);
+    // The second /sim/objects message after the answer shows the parts where the feeder put them (the first may have
+    // left the sim before the restock).
+    const until = seen + 2;
+    const since = Date.now();
+    while (seen < until) {
+      if (Date.now() - since > 5_000) throw new Error('no /sim/objects within 5 s of /sim/restock');
+      await new Promise((r) => setTimeout(r, 20));
+    }
+  };
+  return { parts: () => parts, restock, close: () => ws.close() };
 }
 
 /**

@@ -1,7 +1,8 @@
 // The twin-arm cell's process: one cycle hands a cube over from the left arm (gripper) to the right arm
 // (vacuum tool) through the stand, through the real page, BFF, process nodes, both robot drivers (ur_rtde) and the
 // simulated cell. Where the cube ends up is read from outside the app: the sim's ground truth (/sim/objects).
-// Cycle N takes cube and pocket (N - 1) mod 3, so each profile's run moves the next cube.
+// Cycle N takes cube and pocket (N - 1) mod 3; the sim's feeder puts the cubes back first, so the spec runs again
+// on the same stack (another profile, --repeat-each) with its cube away from its pocket.
 import fs from 'node:fs';
 import yaml from 'js-yaml';
 import { test, expect } from '@playwright/test';
@@ -22,6 +23,7 @@ test('one cycle hands the cycle\'s cube over from the left arm to the right arm 
     const state = page.getByTestId('process-state');
     // Not running (Error when a run before this one ended in one: it shows until the next Start).
     await expect(state).toHaveText(/^(Idle|Error)$/, { timeout: 30_000 });
+    await sim.restock();
     await page.getByRole('button', { name: 'Take control' }).click();
     await expect(page.getByTestId('lease-holder')).toContainText('You have control');
     await page.getByRole('textbox', { name: 'Cycles' }).fill('1');
