@@ -65,6 +65,7 @@ const MASTER_DEPENDENTS = ['ros', 'sim'];
 const CONFIG_ERROR = 2;
 /** After SIGTERM, how long what is left of a dead child (or a dependent of a dead master) gets before SIGKILL. */
 const CLEANUP_GRACE_MS = 1500;
+const KILL_WAIT_MS = 3000;  // after SIGKILL, for what clearChild cleared
 
 /**
  * One supervised child: its command, its current process (null while it is down) and its restart policy.
@@ -282,7 +283,11 @@ async function clearChild(name, pgid, what) {
       log(`${what}: ${pids.map(procName).join(', ')} still running ${seconds(CLEANUP_GRACE_MS)} after SIGTERM; killing ${pids.length === 1 ? 'it' : 'them'}`);
       signalGroup(pgid, 'SIGKILL');
       pids.forEach((p) => signal(p, 'SIGKILL'));
-      await waitUntil(() => left().length === 0, 1000);
+      // Killed, a process is gone only once the kernel has ended all its threads: its successor (the next
+      // roslaunch's node of the same name) must not start beside it, and if it does the log says so.
+      await waitUntil(() => left().length === 0, KILL_WAIT_MS);
+      pids = left();
+      if (pids.length) log(`${what}: ${pids.map(procName).join(', ')} still there ${seconds(KILL_WAIT_MS)} after SIGKILL; going on`);
     }
   }
   if (pgid && !stackProcs().some((p) => p.pgrp === pgid)) tellWatchdog('forget', pgid);

@@ -58,6 +58,19 @@ function duplicateNodes(env) {
   return names.filter((n, i) => names.indexOf(n) !== i);
 }
 
+/**
+ * Each process of a node that runs twice, for the failure message: pid, parent, state, whether it ran before the
+ * kill (`before`: the node pids then).
+ * @param {Record<string, string>} env @param {number[]} before
+ */
+function describeDuplicates(env, before) {
+  const dup = new Set(duplicateNodes(env));
+  return pidsOfStack(env.DATA_DIR).filter((p) => dup.has(cmdline(p).match(/__name:=(\S+)/)?.[1] ?? ''))
+    .map((p) => `${p}${before.includes(p) ? ' (ran before the kill)' : ''}, parent ${ppid(p)} (${cmdline(ppid(p)).slice(0, 80)}), `
+      + `state ${read(p, 'stat').split(') ')[1]?.split(' ')[0]}: ${cmdline(p).slice(0, 200)}`).join('\n');
+}
+const nodePids = (env) => pidsOfStack(env.DATA_DIR).filter((p) => /__name:=/.test(cmdline(p)));
+
 async function health(port) {
   try {
     const r = await fetch(`http://127.0.0.1:${port}/api/health`, { signal: AbortSignal.timeout(1000) });
@@ -172,7 +185,7 @@ describe('a running stack restarts what dies', { timeout: 300_000 }, () => {
     t.diagnostic(`roslaunch: /cell/get_mode answers through rosbridge again ${took.ros} s after the SIGKILL`);
     assert.match(logSince(stack, from), /\[stack\] ros exited \(SIGKILL\); restarting at once \(crash 1 of 5 in 60 s\)/);
     assert.deepEqual(describePids(oldNodes.filter((p) => read(p, 'stat') && !/\) Z /.test(read(p, 'stat')))), [], 'the old nodes are gone');
-    assert.deepEqual(duplicateNodes(env), [], 'no node runs twice');
+    assert.deepEqual(duplicateNodes(env), [], `no node runs twice:\n${describeDuplicates(env, oldNodes)}\n${logSince(stack, from)}`);
     // The BFF's /ros reaches the new rosbridge too.
     assert.ok(await until(() => callService(`ws://127.0.0.1:${BASE}/ros`, '/cell/get_mode', { cookie }), 10_000));
   });
@@ -184,6 +197,7 @@ describe('a running stack restarts what dies', { timeout: 300_000 }, () => {
     assert.ok(old && oldSim && oldLaunch, 'roscore, the sim and roslaunch run');
     const oldSimUri = await lookupNode(env.ROS_MASTER_URI, '/sim_cell');
     assert.ok(oldSimUri, 'the sim is registered');
+    const oldNodes = nodePids(env);
     const from = stack.output().length;
     const t0 = Date.now();
     process.kill(old, 'SIGKILL');
@@ -207,7 +221,7 @@ describe('a running stack restarts what dies', { timeout: 300_000 }, () => {
     assert.notEqual(childPid(env, stack.proc.pid, /-m sim/), oldSim);
     assert.notEqual(childPid(env, stack.proc.pid, /roslaunch --wait/), oldLaunch);
     assert.equal(pidsOfStack(env.DATA_DIR).filter((p) => /rosmaster --core/.test(cmdline(p))).length, 1, 'one master');
-    assert.deepEqual(duplicateNodes(env), [], 'no node runs twice');
+    assert.deepEqual(duplicateNodes(env), [], `no node runs twice:\n${describeDuplicates(env, oldNodes)}\n${log}`);
   });
 
   test('kill -9 of the simulated cell: it comes back at UR_HOST, registers again, and the robot driver reconnects', async (t) => {
