@@ -2,7 +2,7 @@ import { describe, it, expect } from 'vitest';
 import URDFLoader from 'urdf-loader';
 import {
   sceneSection, pickJoints, parseUrdf, urdfJoints, missingJoints, mimicValues, staleness, staleText, applyMarkers,
-  presetPose, formatJoint, routinePath, placeShapes, armBase,
+  presetPose, formatJoint, routinePath, placeShapes, armBase, frameCap, FRAME_COST_MS,
 } from '../../../src/lib/features/scene/logic.js';
 import { TfTree, baseToPose, compose, invert, rotate, yawDeg } from '../../../src/lib/features/scene/tf.js';
 
@@ -198,5 +198,16 @@ describe('scene logic', () => {
       { kind: 'pose', pose: [NaN, 0, 0, 0, 0, 0] },
     ];
     expect(routinePath({ name: 'r', group: 'arm', steps })).toEqual({ name: 'r', group: 'arm', points: [[0.1, 0.2, 0.3], [0.1, 0.2, 0.5]] });
+  });
+});
+
+describe('frameCap', () => {
+  it('a desktop draws up to 60 frames a second while its frames are cheap, 30 once they cost more', () => {
+    expect(frameCap({ coarse: false, frameMs: 0 })).toBe(60);
+    expect(frameCap({ coarse: false, frameMs: FRAME_COST_MS })).toBe(60);
+    expect(frameCap({ coarse: false, frameMs: FRAME_COST_MS + 0.1 })).toBe(30);
+  });
+  it('a touch device keeps to 30 however cheap its frames', () => {
+    expect(frameCap({ coarse: true, frameMs: 0 })).toBe(30);
   });
 });

@@ -283,3 +283,18 @@ export function routinePath(routine) {
     .map((s) => s.pose.slice(0, 3));
   return { name: routine.name, group: routine.group, points };
 }
+
+/** What a frame of the 3D view may cost (ms of the page's own time) before it draws at the lower rate. */
+export const FRAME_COST_MS = 8;
+
+/**
+ * How many frames a second the 3D view draws at most. A touch device (a phone, a tablet) keeps to 30, so a moving
+ * arm leaves its page time for the controls; a desktop draws up to 60 (each joint state that comes, 50 a second),
+ * unless its frames cost more than FRAME_COST_MS each (a software renderer, a slow machine), then 30 as well.
+ * @param {{ coarse: boolean, frameMs: number }} o  coarse: the primary pointer is a finger; frameMs: a frame's
+ *   mean cost so far
+ * @returns {30 | 60}
+ */
+export function frameCap({ coarse, frameMs }) {
+  return coarse || frameMs > FRAME_COST_MS ? 30 : 60;
+}

@@ -9,7 +9,7 @@ import { STLLoader } from 'three/examples/jsm/loaders/STLLoader.js';
 import { ColladaLoader } from 'three/examples/jsm/loaders/ColladaLoader.js';
 import { OBJLoader } from 'three/examples/jsm/loaders/OBJLoader.js';
 import URDFLoader from 'urdf-loader';
-import { presetPose } from './logic.js';
+import { presetPose, frameCap } from './logic.js';
 import { themeColor, onThemeChange } from '../../core/theme-colors.js';
 import { m } from '$lib/paraglide/messages.js';
 
@@ -17,7 +17,6 @@ const STALE_COLOR = new THREE.Color(0x8a8f98);
 const GHOST_COLOR = new THREE.Color(0xf59e0b);
 const PATH_COLOR = new THREE.Color(0x7c3aed);
 const FOV = 45;
-const MAX_FPS = 30;
 const MIN_CHANGE = 1e-4;
 const VSYNC_SLACK_MS = 8;
 
@@ -123,8 +122,11 @@ export class SceneViewer {
     this.frames = 0;
     this.visible = true;
     this.raf = 0;
-    /** @type {any} a frame put off to keep to MAX_FPS */
+    /** @type {any} a frame put off to keep to the frame cap */
     this.wait = 0;
+    this.coarse = window.matchMedia?.('(pointer: coarse)').matches ?? false;
+    /** a frame's mean cost in ms (the render call, exponentially averaged) */
+    this.frameMs = 0;
     this.lastFrame = -Infinity;
     this.disposed = false;
     this.resize = new ResizeObserver(() => this.fit());
@@ -153,13 +155,14 @@ export class SceneViewer {
 
   /**
    * Draw at the next frame (once, however many changes come before it), if the view is on screen; at most
-   * MAX_FPS frames a second, so a moving arm leaves the page (its controls, its heartbeats) time to run.
+   * frameCap() frames a second, so a moving arm leaves the page (its controls, its heartbeats) time to run.
    */
   invalidate() {
     if (this.disposed || this.raf || this.wait || !this.visible || document.visibilityState === 'hidden') return;
-    // Half a display frame of slack: at 60 Hz the view draws every other vsync, a steady 30 frames a second
-    // (without it a frame due a hair after a vsync waits for the next one: 20-25 a second).
-    const early = this.lastFrame + 1000 / MAX_FPS - VSYNC_SLACK_MS - performance.now();
+    // Half a display frame of slack: at 60 Hz and a cap of 30 the view draws every other vsync, a steady 30 frames a
+    // second (without it a frame due a hair after a vsync waits for the next one: 20-25 a second).
+    const fps = frameCap({ coarse: this.coarse, frameMs: this.frameMs });
+    const early = this.lastFrame + 1000 / fps - VSYNC_SLACK_MS - performance.now();
     if (early > 1) {
       this.wait = setTimeout(() => {
         this.wait = 0;
@@ -170,8 +173,12 @@ export class SceneViewer {
     this.raf = requestAnimationFrame(() => {
       this.raf = 0;
       if (this.disposed) return;
-      this.lastFrame = performance.now();
+      const t0 = performance.now();
+      this.lastFrame = t0;
       this.renderer.render(this.scene, this.camera);
+      const cost = performance.now() - t0;
+      // The first frame compiles the shaders: not what the next ones cost.
+      if (this.frames) this.frameMs = 0.9 * this.frameMs + 0.1 * cost;
       this.frames++;
     });
   }
