@@ -54,6 +54,7 @@ def main(argv: Any = None) -> None:
         service_request_timeout=_param("~service_request_timeout", BridgeConfig.service_request_timeout),
         publisher_replay_window=_param("~publisher_replay_window", BridgeConfig.publisher_replay_window),
         publisher_replay_max=_param("~publisher_replay_max", BridgeConfig.publisher_replay_max),
+        unregister_timeout=_param("~unregister_timeout", BridgeConfig.unregister_timeout),
     )
     context = build_context(cfg)
     clients: Set[RosbridgeHandler] = set()

@@ -33,6 +33,8 @@ class BridgeConfig:
     # A new publisher keeps what it sends in its first seconds for ROS subscribers still connecting.
     publisher_replay_window: float = 1.0  # seconds after the publisher is created; 0 disables
     publisher_replay_max: int = 100  # messages kept per new publisher (oldest dropped first)
+    # A publisher no client holds stays registered this long (rosbridge_suite's unregister_timeout); 0: at once.
+    unregister_timeout: float = 10.0
 
 
 @dataclass
@@ -53,7 +55,7 @@ class BridgeContext:
     def __post_init__(self) -> None:
         if self.publishers is None:
             self.publishers = PublisherRegistry(self.hub, self.config.publisher_replay_window,
-                                                self.config.publisher_replay_max)
+                                                self.config.publisher_replay_max, self.config.unregister_timeout)
 
     def register(self, op: str, handler: Handler) -> None:
         self.handlers[op] = handler

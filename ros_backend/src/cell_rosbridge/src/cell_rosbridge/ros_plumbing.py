@@ -345,16 +345,34 @@ class SharedPublisher:
 
 
 class PublisherRegistry:
-    """Shared publishers by topic; each client that advertised (or published) holds a reference."""
+    """Shared publishers by topic; each client that advertised (or published) holds a reference.
 
-    def __init__(self, hub: TopicHub, replay_window: float = 1.0, replay_max: int = 100) -> None:
+    When the last client lets go, the publisher stays registered for `unregister_timeout` seconds more (as
+    rosbridge_suite's `unregister_timeout`, default 10 s) and a client advertising meanwhile takes it over. Why: a
+    rospy subscriber that hears of a publisher and connects just after it is unregistered gets "not a publisher",
+    gives up, and keeps that dead connection; it then ignores every later publisher of the topic at the same
+    address (this node), so a page that left the Manual page at once broke jogging for the next one until
+    rosbridge restarted (rosbridge_suite #138, ros_comm #111).
+    """
+
+    def __init__(self, hub: TopicHub, replay_window: float = 1.0, replay_max: int = 100,
+                 unregister_timeout: float = 10.0) -> None:
         self._pubs: Dict[str, SharedPublisher] = {}
         self._lock = threading.RLock()
         self._hub = hub
         self._replay = (replay_window, replay_max)
+        self._unregister_timeout = unregister_timeout
+        self._timers: Dict[str, threading.Timer] = {}  # topic -> its pending unregistration
 
     def count(self) -> int:
-        return len(self._pubs)
+        """Publishers some client holds (not those waiting out their unregister timeout)."""
+        with self._lock:
+            return sum(1 for p in self._pubs.values() if p.clients)
+
+    def lingering(self) -> int:
+        """Publishers no client holds any more, still registered until their unregister timeout."""
+        with self._lock:
+            return len(self._timers)
 
     def get(self, topic: str) -> Optional[SharedPublisher]:
         return self._pubs.get(topic)
@@ -363,6 +381,10 @@ class PublisherRegistry:
                  queue_size: int = 100) -> SharedPublisher:
         with self._lock:
             pub = self._pubs.get(topic)
+            if pub is not None and not pub.clients and type_name \
+                    and conversion.normalize_type(type_name) != pub.type_name:
+                self._drop(topic)  # nobody holds the old type's publisher: the new client's type wins
+                pub = None
             if pub is None:
                 actual = master_topic_types().get(topic) or self._hub.type_of(topic)
                 if type_name:
@@ -378,6 +400,9 @@ class PublisherRegistry:
                                                           *self._replay)
             elif type_name and conversion.normalize_type(type_name) != pub.type_name:
                 raise TopicError(f"topic {topic} already has type {pub.type_name}, not {type_name}")
+            timer = self._timers.pop(topic, None)
+            if timer is not None:
+                timer.cancel()  # taken over before its unregister timeout
             pub.clients.add(client)
             return pub
 
@@ -388,15 +413,33 @@ class PublisherRegistry:
                 return False
             pub.clients.discard(client)
             if not pub.clients:
-                del self._pubs[topic]
-                pub.unregister()
+                if self._unregister_timeout > 0:
+                    timer = threading.Timer(self._unregister_timeout, self._expire, (topic, pub))
+                    timer.daemon = True
+                    self._timers[topic] = timer
+                    timer.start()
+                else:
+                    self._drop(topic)
             return True
+
+    def _expire(self, topic: str, pub: SharedPublisher) -> None:
+        with self._lock:
+            if self._pubs.get(topic) is pub and not pub.clients:
+                self._drop(topic)
+
+    def _drop(self, topic: str) -> None:
+        """Caller holds the lock."""
+        timer = self._timers.pop(topic, None)
+        if timer is not None:
+            timer.cancel()
+        pub = self._pubs.pop(topic, None)
+        if pub is not None:
+            pub.unregister()
 
     def shutdown(self) -> None:
         with self._lock:
-            for pub in self._pubs.values():
-                pub.unregister()
-            self._pubs.clear()
+            for topic in list(self._pubs):
+                self._drop(topic)
 
 
 class ServiceCallError(RuntimeError):
