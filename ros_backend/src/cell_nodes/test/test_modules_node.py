@@ -58,6 +58,17 @@ def _pid_of(node: str) -> int:
     return int(xmlrpc.client.ServerProxy(uri).getPid("/modules_test_client")[2])
 
 
+def _cpu_seconds(pid: int, window: float) -> float:
+    """The CPU time a process used over the next `window` seconds."""
+    def total() -> float:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
+    t0 = total()
+    time.sleep(window)
+    return total() - t0
+
+
 def _alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
@@ -138,6 +149,10 @@ def test_launch_kill_output_stop_and_refusals(node) -> None:
     assert states.since(t0, "Vision")[-2:] == ["transitioning", "inactive"]
     assert states.now("Vision")[1:3] == ((False, False), False)
     wait_for(lambda: not _alive(survivor), 5, what="vision_monitor's process to end")
+    # Nothing of the stopped launch keeps running in the node: roslaunch's XML-RPC server thread spun on its closed
+    # socket for good (a whole core's share per stopped module) before launcher._shut_down ended it.
+    me = _pid_of("/modules_test")
+    wait_for(lambda: _cpu_seconds(me, 1.0) < 0.3, 10, what="the modules node idle after the stop")
 
     # --- names not in the cell file, monitor-only modules
     for call in (launch, stop):
