@@ -424,8 +424,13 @@ class PublisherRegistry:
 
     def _expire(self, topic: str, pub: SharedPublisher) -> None:
         with self._lock:
-            if self._pubs.get(topic) is pub and not pub.clients:
-                self._drop(topic)
+            if self._pubs.get(topic) is not pub or pub.clients:
+                return  # taken over meanwhile
+            self._timers.pop(topic, None)
+            del self._pubs[topic]
+        # The master's call outside the lock: an advertise or publish meanwhile need not wait for it (a new publisher
+        # of the topic is safe: rospy counts the topic's publishers itself).
+        pub.unregister()
 
     def _drop(self, topic: str) -> None:
         """Caller holds the lock."""
