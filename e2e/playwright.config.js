@@ -1,6 +1,5 @@
 // Playwright against the whole stack (roscore, rosbridge, ROS nodes, BFF, built PWA) on isolated ports,
 // in Debian's Chromium with phone, tablet and desktop profiles.
-import fs from 'node:fs';
 import { defineConfig, devices } from '@playwright/test';
 
 const chromium = {
@@ -12,29 +11,10 @@ const chromium = {
   },
 };
 
-// Which specs run on which profile, to keep the suite's time: each spec runs on the device of the user it is for
-// (the operator's on the phone, the commissioning engineer's on the desktop, the shop floor's tablet between), and
-// what depends on the layout or on touch against a mouse on more than one. The profiles run one after the other
-// against one stack: a spec leaves the cell as it found it (or as its next run expects).
-/** @type {Record<'phone' | 'tablet' | 'desktop', string[]>} */
-export const SPECS = {
-  phone: ['a11y', 'a11y-alarm', 'shell', 'manual', 'manual-lease', 'alarms', 'audit', 'database', 'modules', 'parameters',
-    'plant', 'process', 'recovery', 'routines', 'sensors', 'video', 'video-raw'],
-  tablet: ['a11y-glove', 'recorder', 'inspect-graph', 'scene', 'diagnostics'],
-  desktop: ['a11y', 'manual', 'inspect', 'access', 'i18n', 'video-raw'],
-};
-// A spec in no list would never run: refused here rather than found missing later.
-const unassigned = fs.readdirSync(new URL('./tests', import.meta.url)).filter((f) => f.endsWith('.spec.js'))
-  .map((f) => f.slice(0, -'.spec.js'.length)).filter((n) => !Object.values(SPECS).some((l) => l.includes(n)));
-if (unassigned.length) throw new Error(`e2e/playwright.config.js: no profile runs ${unassigned.join(', ')} (add them to SPECS)`);
-// E2E_ALL_PROFILES=1: every spec on every profile (174 tests, about 24 minutes on the 2-core machine against 9.5 for
-// the lists above; too long for CI's 90-minute budget on a slow day, so not the default yet).
-const ALL = process.env.E2E_ALL_PROFILES === '1';
-/** @param {'phone' | 'tablet' | 'desktop'} name */
-const only = (name) => (ALL ? ['**/*.spec.js'] : SPECS[name].map((n) => `**/${n}.spec.js`));
-
 export default defineConfig({
   testDir: './tests',
+  // Every spec on every profile; `run.sh` runs the profiles in two lanes, each lane with its own stack and directory.
+  outputDir: process.env.E2E_OUTPUT_DIR || 'test-results',
   // The tests share one stack whose ROS state (mode, rosbridge process) they change: one at a time.
   workers: 1,
   fullyParallel: false,
@@ -56,8 +36,8 @@ export default defineConfig({
     screenshot: 'only-on-failure',
   },
   projects: [
-    { name: 'phone', testMatch: only('phone'), use: { ...devices['Pixel 7'], ...chromium } },
-    { name: 'tablet', testMatch: only('tablet'), use: { ...devices['iPad Mini'], ...chromium } },
-    { name: 'desktop', testMatch: only('desktop'), use: { ...devices['Desktop Chrome'], ...chromium } },
+    { name: 'phone', use: { ...devices['Pixel 7'], ...chromium } },
+    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium } },
+    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium } },
   ],
 });

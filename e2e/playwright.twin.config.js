@@ -1,6 +1,6 @@
 // The second cell (config/twin-arm-cell.yaml: two UR arms, a third role) through the same code: its own stack on
 // its own ports and controller addresses, on the phone, tablet and desktop profiles one after the other. `npm test -w e2e`
-// runs the demo cell's config, then this.
+// (run.sh) runs it in its second lane, after the demo cell's desktop run.
 import { defineConfig } from '@playwright/test';
 import base from './playwright.config.js';
 
@@ -12,5 +12,5 @@ export default defineConfig({
   ...base,
   testDir: './twin',
   use: { ...base.use, baseURL: `http://localhost:${process.env.E2E_PORT}` },
-  projects: (base.projects ?? []).map(({ testMatch, ...p }) => p),
+  projects: base.projects,
 });

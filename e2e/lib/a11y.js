@@ -13,7 +13,7 @@ const themes = () => (test.info().project.name === 'phone' ? THEMES : ['light'])
 /** @type {Record<string, Record<string, Record<string, Record<string, number>>>>} */
 const results = {};
 
-/** Writes test-results/<project>/a11y-<name>-<profile>.json once the spec's tests are done. @param {string} name */
+/** Writes <output dir>/<project>/a11y-<name>-<profile>.json once the spec's tests are done. @param {string} name */
 export function keepResults(name) {
   test.afterAll(async ({}, info) => {
     fs.mkdirSync(info.project.outputDir, { recursive: true });

@@ -1,5 +1,5 @@
 // The BFF is the only door: an operator's forbidden rosbridge ops through /ros are refused with rosbridge
-// errors and never reach ROS; the admin pages' APIs are refused too. On the desktop (playwright.config.js).
+// errors and never reach ROS; the admin pages' APIs are refused too. On every profile.
 import { test, expect } from '@playwright/test';
 import { loginAs, sessionCookie, rosSocket } from '../lib/app.js';
 import { rosCli, publishMode } from '../lib/ros.js';

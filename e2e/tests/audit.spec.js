@@ -3,7 +3,7 @@
 import { test, expect } from '@playwright/test';
 import { loginAs, openMenu, sessionCookie, rosSocket } from '../lib/app.js';
 
-// (once, on the phone: playwright.config.js.)
+// (on every profile.)
 
 test('newest first, filtered by user, operation and outcome, a page at a time', async ({ browser, page, baseURL }) => {
   test.slow();

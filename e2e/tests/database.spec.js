@@ -9,7 +9,7 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { loginAs, openMenu } from '../lib/app.js';
 
-// (files on the robot PC change: once, on the phone: playwright.config.js.)
+// (on every profile; each run puts the files back as it found them.)
 
 const usbRoot = (process.env.USB_ROOTS || '').split(':').filter(Boolean)[0] || '/media';
 const drive = path.join(usbRoot, `e2e-usb-${process.pid}`);

@@ -1,5 +1,5 @@
 // The control lease on the Manual page: one session holds control, another one's jog is refused, an admin's
-// take-over stops the holder's jog. Two sessions in one browser: on the phone profile only (playwright.config.js).
+// take-over stops the holder's jog. Two sessions in one browser, on every profile.
 import { test, expect } from '@playwright/test';
 import { sessionCookie, rosSocket } from '../lib/app.js';
 import { watchRobot } from '../lib/robot.js';

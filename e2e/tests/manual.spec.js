@@ -1,5 +1,5 @@
-// Manual motion through the real page, BFF, rosbridge, driver (ur_rtde) and the simulated UR5, on the phone and
-// desktop profiles (playwright.config.js: touch and mouse). The arm is watched from outside the app (the driver's /joint_states
+// Manual motion through the real page, BFF, rosbridge, driver (ur_rtde) and the simulated UR5, on every
+// profile (touch and mouse). The arm is watched from outside the app (the driver's /joint_states
 // on the stack's rosbridge).
 import { test, expect } from '@playwright/test';
 import { sessionCookie, rosSocket, loginAs } from '../lib/app.js';

@@ -5,7 +5,7 @@ import { test, expect } from '@playwright/test';
 import { loginAs, openMenu } from '../lib/app.js';
 import { rosCli } from '../lib/ros.js';
 
-// (rostopic checks and the hidden-page check: once, on the phone; the tablet and desktop projects leave it out: playwright.config.js.)
+// (on every profile, the rostopic checks and the hidden-page check included.)
 
 const ROSBRIDGE = '/rosbridge_websocket';
 

@@ -5,7 +5,7 @@ import { test, expect } from '@playwright/test';
 import { loginAs, openMenu } from '../lib/app.js';
 import { rosCli } from '../lib/ros.js';
 
-// (subscriptions, touch pinch-zoom: once, on the phone; the tablet and desktop projects leave it out: playwright.config.js.)
+// (on every profile: the pinch is real touch events through the DevTools protocol, which every profile takes.)
 
 const ROSBRIDGE = '/rosbridge_websocket';
 const WORKBENCH = '/cell/camera/workbench/image/compressed';
