@@ -47,7 +47,9 @@ class ArmDriver:
         self.joint_names = list(spec.model.joint_names)
         rospy.set_param(names.robot_description,
                         mdl.urdf_text(spec.model, spec.rename_map, names.tip_link, spec.tool_length, mesh_uri=True))
-        self.pub_joints = rospy.Publisher(names.joint_states, JointState, queue_size=10)
+        # A second of joint states per subscriber: rospy drops the oldest when a connection's writer thread falls
+        # behind, and on a starved host (two e2e lanes on two cores) 10 (50 ms at 200 Hz) lost some of them.
+        self.pub_joints = rospy.Publisher(names.joint_states, JointState, queue_size=max(10, int(spec.rate_hz)))
         self.pub_holding = rospy.Publisher(names.holding_topic, Bool, queue_size=5)
         self.suction = rospy.Service(names.suction_service, SetBool, self._set_suction)
         self.server = actionlib.ActionServer(f"{names.controller}/follow_joint_trajectory", FollowJointTrajectoryAction,
