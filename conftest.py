@@ -52,6 +52,22 @@ def roscore() -> Iterator[str]:
             os.killpg(proc.pid, signal.SIGKILL)
 
 
+ROS_VERSION = 2 if os.environ.get("ROS_VERSION") == "2" else 1
+
+
+@pytest.fixture(scope="session")
+def ros_graph(request: pytest.FixtureRequest) -> str:
+    """A ROS graph of this session's own, for tests written once for both generations: ROS 1, a live roscore
+    (its URI); ROS 2, a domain of its own with localhost-only discovery (no master: the domain's id)."""
+    if ROS_VERSION == 1:
+        return request.getfixturevalue("roscore")
+    domain = str(100 + os.getpid() % 100)  # 100-199: beside the stacks' own domains (scripts/stack.js)
+    home = tempfile.mkdtemp(prefix="ros2home-")
+    os.environ.update(ROS_DOMAIN_ID=domain, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_HOME=home,
+                      ROS_LOG_DIR=home)
+    return domain
+
+
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_makereport(item, call):
     """A failing test's report shows the end of the log of each ROS node running then (the node tests'

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Idempotent install step shared by `npm start` and `npm test`.
 # Each stage is skipped when its inputs have not changed since it last succeeded (stamps in .state/).
-# Usage: bootstrap.sh [stage...]   stages: apt venv npm catkin app (default: all, in that order)
+# Usage: bootstrap.sh [stage...]   stages: apt venv npm catkin ros2 app (default: all, in that order)
 set -euo pipefail
-STAGES=" ${*:-apt venv npm catkin app} "
+STAGES=" ${*:-apt venv npm catkin ros2 app} "
 want() { [[ "$STAGES" == *" $1 "* ]]; }
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$ROOT"
@@ -68,7 +68,20 @@ if want catkin && { ! fresh catkin "$s" || [[ ! -f ros_backend/devel/setup.bash 
   mark catkin "$s"
 fi
 
-# 5. the PWA build
+# 5. ROS 2 Jazzy: a venv of its own (rosidl and genpy make Python packages of the same names) and our interfaces
+# built for it from the same definitions (ros_backend/ros2/build_interfaces.py)
+s=$( (cat requirements-ros2.txt; find ros_backend/ros2 ros_backend/src/cell_msgs -type f -not -name '*.pyc' | sort | xargs cat) | sha256sum | cut -c1-16)
+if want ros2 && { ! fresh ros2 "$s" || [[ ! -d ros_backend/install-ros2/share/cell_msgs ]]; }; then
+  log "ROS 2 Jazzy venv and interfaces"
+  [[ -x .venv-ros2/bin/python ]] || /usr/bin/python3 -m venv .venv-ros2
+  .venv-ros2/bin/python -m pip install -q --disable-pip-version-check -r requirements-ros2.txt >"$STATE/ros2.log" 2>&1 \
+    || { tail -40 "$STATE/ros2.log" >&2; exit 1; }
+  .venv-ros2/bin/python ros_backend/ros2/build_interfaces.py --venv .venv-ros2 --prefix ros_backend/install-ros2 \
+    --build "$STATE/ros2-build" >>"$STATE/ros2.log" 2>&1 || { tail -40 "$STATE/ros2.log" >&2; exit 1; }
+  mark ros2 "$s"
+fi
+
+# 6. the PWA build
 s=$( (find app/src app/static app/messages app/project.inlang -type f -not -path 'app/src/lib/paraglide/*' 2>/dev/null | sort | xargs cat; cat app/package.json app/vite.config.* app/svelte.config.* app/i18n.*.js app/preload-fallback.js 2>/dev/null) | sha256sum | cut -c1-16)
 if want app && { ! fresh app "$s" || [[ ! -f app/build/index.html ]]; }; then
   log "building app"

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Every suite, in order of speed: the type check, BFF unit, app unit, Python (unit + integration on live roscores),
+# Every suite, in order of speed: the type check, BFF unit, app unit, Python (unit + integration on live roscores;
+# the ROS 2 suites under .venv-ros2 after them),
 # the supervisor, then Playwright end to end against the whole stack. Stops at the first failing suite.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,6 +20,10 @@ npm test -w app --silent
 
 step "ros_backend + sim (pytest, live roscore)"
 ( source scripts/ros-env.sh && python -m pytest -q )
+
+step "ROS 2 Jazzy: our interfaces, and the rosbridge protocol on rclpy, same test bodies as on ROS 1"
+( source scripts/ros2-env.sh && python -m pytest -q ros_backend/ros2/test/test_interfaces.py \
+    ros_backend/src/cell_rosbridge/test/test_generations.py )
 
 step "stack supervisor (node:test)"
 node --test --test-concurrency=1 scripts/test/*.test.js

@@ -221,6 +221,14 @@ def test_every_debian_python_module_the_code_imports_comes_from_the_bootstrap_pa
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     where = json.loads(r.stdout.strip().splitlines()[-1])
+    # ROS 2's modules (rclpy, the rosidl packages) live in .venv-ros2, from requirements-ros2.txt: the ROS 2 side
+    # imports them there (scripts/ros2-env.sh), never in the ROS 1 environment.
+    ros2_only = [n for n in names if where.get(n) is None]
+    if ros2_only:
+        r2 = subprocess.run(["bash", "-c", 'source scripts/ros2-env.sh && python -c "$0" "$@"', RESOLVE, *ros2_only],
+                            cwd=ROOT, capture_output=True, text=True, timeout=120)
+        assert r2.returncode == 0, r2.stderr
+        where.update({k: v for k, v in json.loads(r2.stdout.strip().splitlines()[-1]).items() if v is not None})
     pkgs = closure()
     problems, checked = [], {}
     for name in names:

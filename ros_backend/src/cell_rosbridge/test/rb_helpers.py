@@ -10,7 +10,7 @@ import subprocess
 import sys
 from typing import Callable, Dict, List, Optional
 
-import rosgraph
+ROS_VERSION = 2 if os.environ.get("ROS_VERSION") == "2" else 1
 
 ROOT = pathlib.Path(__file__).resolve().parents[4]
 PKG = pathlib.Path(__file__).resolve().parents[1]
@@ -37,8 +37,14 @@ class BridgeProcess:
                  name: Optional[str] = None, env: Optional[Dict[str, str]] = None) -> None:
         self.port = port or free_port()
         self.name = name or f"rosbridge_{self.port}"
-        args = [sys.executable, str(SERVER), f"__name:={self.name}", f"_port:={self.port}"]
-        args += [f"_{k}:={v}" for k, v in (params or {}).items()]
+        args = [sys.executable, str(SERVER)]
+        if ROS_VERSION == 2:  # node parameters
+            args += ["--ros-args", "-r", f"__node:={self.name}", "-p", f"port:={self.port}"]
+            for k, v in (params or {}).items():
+                args += ["-p", f"{k}:={v}"]
+        else:  # the ROS 1 node's private parameters
+            args += [f"__name:={self.name}", f"_port:={self.port}"]
+            args += [f"_{k}:={v}" for k, v in (params or {}).items()]
         self.log_path = pathlib.Path(os.environ.get("ROS_LOG_DIR", "/tmp")) / f"{self.name}.out"
         self._log = open(self.log_path, "wb")
         self.proc = subprocess.Popen(args, stdout=self._log, stderr=subprocess.STDOUT, start_new_session=True,
@@ -78,20 +84,24 @@ class BridgeProcess:
 
 
 def node_subscriptions(node: str) -> List[str]:
+    import rosgraph
     _, subs, _ = rosgraph.Master("/rb_test").getSystemState()
     return sorted(t for t, nodes in subs if "/" + node.lstrip("/") in nodes)
 
 
 def node_publications(node: str) -> List[str]:
+    import rosgraph
     pubs, _, _ = rosgraph.Master("/rb_test").getSystemState()
     return sorted(t for t, nodes in pubs if "/" + node.lstrip("/") in nodes)
 
 
 def node_services(node: str) -> List[str]:
+    import rosgraph
     _, _, srvs = rosgraph.Master("/rb_test").getSystemState()
     return sorted(s for s, nodes in srvs if "/" + node.lstrip("/") in nodes)
 
 
 def subscribers_of(topic: str) -> List[str]:
+    import rosgraph
     _, subs, _ = rosgraph.Master("/rb_test").getSystemState()
     return next((sorted(n) for t, n in subs if t == topic), [])

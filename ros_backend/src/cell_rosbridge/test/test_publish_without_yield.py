@@ -8,7 +8,7 @@ from unittest import mock
 
 from rospy.impl.tcpros_pubsub import QueuedConnection
 
-from cell_rosbridge.ros_plumbing import publish_without_yield
+from cell_rosbridge.plumbing_ros1 import publish_without_yield
 
 
 class _Conn:

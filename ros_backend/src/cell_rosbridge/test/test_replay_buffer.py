@@ -125,7 +125,7 @@ class FakePub:
 
 
 def _listener(latch: bool = False, window: float = 1.0) -> Tuple[Any, FakeImpl, FakePub, Clock]:
-    from cell_rosbridge.ros_plumbing import ReplayListener
+    from cell_rosbridge.plumbing_ros1 import ReplayListener
     clock = Clock()
     impl = FakeImpl(latch)
     listener = ReplayListener(impl, ReplayBuffer(window, 100, clock=clock))

@@ -1,4 +1,6 @@
-"""ROS 1 message <-> plain Python structures (the rosbridge v2 wire form).
+"""ROS message <-> plain Python structures (the rosbridge v2 wire form), for either generation.
+
+The walker is one; what a generation's message classes look like is in types_ros1 / types_ros2.
 
 Two output flavours share one walker:
 - JSON form: uint8[]/char[] as base64 text, NaN/inf floats as None (JSON has no NaN; rosbridge maps them to null).
@@ -12,11 +14,14 @@ import base64
 import math
 import struct
 from functools import lru_cache
-from typing import Any, Callable, Dict, List, Optional, Tuple, Type
+from typing import Any, Dict, List, Optional, Tuple
 
-import genpy
-import roslib.message
-import rospy
+from .generation import ROS_VERSION
+
+if ROS_VERSION == 2:
+    from . import types_ros2 as _types
+else:
+    from . import types_ros1 as _types  # type: ignore[no-redef]
 
 try:  # cbor2 is optional for JSON-only use; tags are only needed for CBOR output
     from cbor2 import CBORTag
@@ -55,23 +60,10 @@ class UnknownTypeError(ValueError):
     pass
 
 
-def split_array_type(slot_type: str) -> Tuple[str, bool, Optional[int]]:
-    """'float64[6]' -> ('float64', True, 6); 'string' -> ('string', False, None)."""
-    if not slot_type.endswith("]"):
-        return slot_type, False, None
-    base, _, rest = slot_type.partition("[")
-    size = rest[:-1]
-    return base, True, int(size) if size else None
-
-
-@lru_cache(maxsize=None)
-def _fields(msg_cls: type) -> Tuple[Tuple[str, str, str, bool, Optional[int]], ...]:
-    """Per-type field plan, computed once (name, full type, base type, is_array, fixed length)."""
-    out = []
-    for name, slot_type in zip(msg_cls.__slots__, msg_cls._slot_types):
-        base, is_array, length = split_array_type(slot_type)
-        out.append((name, slot_type, base, is_array, length))
-    return tuple(out)
+_fields = _types.fields
+type_name_of = _types.type_name
+request_class = _types.request_class
+response_class = _types.response_class
 
 
 def normalize_type(type_name: str) -> str:
@@ -87,7 +79,7 @@ def get_message_class(type_name: str) -> type:
         raise UnknownTypeError(f"invalid message type {type_name!r}")
     type_name = normalize_type(type_name)
     try:
-        cls = roslib.message.get_message_class(type_name, reload_on_error=False)
+        cls = _types.load_message(type_name)
     except Exception as exc:  # roslib raises several kinds on bad names
         raise UnknownTypeError(f"unknown message type '{type_name}': {exc}") from exc
     if cls is None:
@@ -100,7 +92,7 @@ def get_service_class(type_name: str) -> type:
         raise UnknownTypeError(f"invalid service type {type_name!r}")
     type_name = normalize_type(type_name)
     try:
-        cls = roslib.message.get_service_class(type_name, reload_on_error=False)
+        cls = _types.load_service(type_name)
     except Exception as exc:
         raise UnknownTypeError(f"unknown service type '{type_name}': {exc}") from exc
     if cls is None:
@@ -124,9 +116,13 @@ def msg_to_dict(msg: Any, cbor: bool = False) -> Dict[str, Any]:
 
 def _value_to_wire(value: Any, base: str, is_array: bool, cbor: bool) -> Any:
     if is_array:
-        if base in BYTE_ARRAY_BASES:
-            raw = value if isinstance(value, (bytes, bytearray)) else bytes(value)
+        if base in BYTE_ARRAY_BASES or (base == "byte" and ROS_VERSION == 2):  # ROS 2 octet: bytes too
+            if value and isinstance(value, list) and isinstance(value[0], bytes):
+                value = b"".join(value)
+            raw = value if isinstance(value, (bytes, bytearray)) else bytes(value)  # array.array, numpy
             return bytes(raw) if cbor else base64.b64encode(raw).decode("ascii")
+        if hasattr(value, "tolist"):  # rclpy's array.array and numpy arrays
+            value = value.tolist()
         if base in FLOAT_TYPES:
             if cbor:
                 return _typed_array(base, value)
@@ -167,17 +163,18 @@ def dict_to_msg(msg_cls: type, data: Any, path: str = "", stamp_now: bool = True
     if data is None:
         data = {}
     if not isinstance(data, dict):
-        raise ConversionError(path, f"expected an object for {msg_cls._type}, got {type(data).__name__}")
+        raise ConversionError(path, f"expected an object for {type_name_of(msg_cls)}, got {type(data).__name__}")
     msg = msg_cls()
-    known = set(msg_cls.__slots__)
+    plan = _fields(msg_cls)
+    known = {f[0] for f in plan}
     for key in data:
         if key not in known:
-            raise ConversionError(_join(path, str(key)), f"no such field in {msg_cls._type}")
-    for name, slot_type, base, is_array, length in _fields(msg_cls):
+            raise ConversionError(_join(path, str(key)), f"no such field in {type_name_of(msg_cls)}")
+    for name, slot_type, base, is_array, length in plan:
         fpath = _join(path, name)
         if name not in data:
             if stamp_now and base == "std_msgs/Header" and not is_array:
-                getattr(msg, name).stamp = rospy.Time.now() if rospy.core.is_initialized() else genpy.Time()
+                getattr(msg, name).stamp = _types.now()
             elif missing is not None:
                 missing.append(fpath)
             continue
@@ -185,7 +182,7 @@ def dict_to_msg(msg_cls: type, data: Any, path: str = "", stamp_now: bool = True
         if stamp_now and base == "std_msgs/Header" and not is_array and isinstance(value, dict) \
                 and "stamp" not in value:
             header = dict_to_msg(msg_cls=_header_cls(), data=value, path=fpath, stamp_now=False)
-            header.stamp = rospy.Time.now() if rospy.core.is_initialized() else genpy.Time()
+            header.stamp = _types.now()
             setattr(msg, name, header)
             continue
         setattr(msg, name, _wire_to_value(value, slot_type, base, is_array, length, fpath, stamp_now, missing))
@@ -204,19 +201,20 @@ def _header_cls() -> type:
 def _wire_to_value(value: Any, slot_type: str, base: str, is_array: bool, length: Optional[int],
                    path: str, stamp_now: bool, missing: Optional[List[str]]) -> Any:
     if is_array:
-        if base in BYTE_ARRAY_BASES:
+        if base in BYTE_ARRAY_BASES or (base == "byte" and ROS_VERSION == 2):
             raw = _to_bytes(value, path)
             if length is not None and len(raw) != length:
                 raise ConversionError(path, f"expected {length} bytes, got {len(raw)}")
-            return raw
+            return _types.byte_array(base, raw, length) if ROS_VERSION == 2 else raw
         if CBORTag is not None and isinstance(value, CBORTag):
             value = _untag(value, path)
         if not isinstance(value, (list, tuple)):
             raise ConversionError(path, f"expected an array for {slot_type}, got {type(value).__name__}")
         if length is not None and len(value) != length:
             raise ConversionError(path, f"expected {length} elements, got {len(value)}")
-        return [_wire_to_value(v, base, base, False, None, f"{path}[{i}]", stamp_now, missing)
-                for i, v in enumerate(value)]
+        items = [_wire_to_value(v, base, base, False, None, f"{path}[{i}]", stamp_now, missing)
+                 for i, v in enumerate(value)]
+        return _types.number_array(base, items, length) if ROS_VERSION == 2 else items
     if base == "bool":
         if isinstance(value, bool):
             return value
@@ -281,7 +279,6 @@ def _untag(tag: Any, path: str) -> List[Any]:
 
 
 def _to_time(value: Any, base: str, path: str) -> Any:
-    cls = genpy.Time if base == "time" else genpy.Duration
     if isinstance(value, dict):
         secs = value.get("secs", value.get("sec", 0))
         nsecs = value.get("nsecs", value.get("nanosec", 0))
@@ -295,11 +292,11 @@ def _to_time(value: Any, base: str, path: str) -> Any:
             raise ConversionError(path, f"{base} out of range")
         if not (-2**31 <= secs <= 2**32 - 1):
             raise ConversionError(path, f"{base} out of range")
-        return cls(secs, nsecs)
+        return _types.make_time(base, secs, nsecs)
     if value == "now" and base == "time":
-        return rospy.Time.now()
+        return _types.now()
     if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
-        return cls.from_sec(value)
+        return _types.time_from_sec(base, value)
     raise ConversionError(path, f"expected {{secs, nsecs}} for {base}, got {type(value).__name__}")
 
 
@@ -308,7 +305,7 @@ def args_to_request(req_cls: type, args: Any) -> Any:
     if args is None:
         args = {}
     if isinstance(args, (list, tuple)):
-        names = list(req_cls.__slots__)
+        names = [f[0] for f in _fields(req_cls)]
         if len(args) > len(names):
             raise ConversionError("args", f"{len(args)} positional args for {len(names)} fields")
         args = dict(zip(names, args))
@@ -316,8 +313,5 @@ def args_to_request(req_cls: type, args: Any) -> Any:
 
 
 def serialize(msg: Any) -> bytes:
-    """ROS 1 wire bytes of a message (for cbor-raw)."""
-    import io
-    buf = io.BytesIO()
-    msg.serialize(buf)
-    return buf.getvalue()
+    """The generation's wire bytes of a message (for cbor-raw): ROS 1 serialization or CDR."""
+    return _types.serialize(msg)

@@ -1,7 +1,7 @@
 """What every capability (op handler) shares: request field checks, the ProtocolError, constants, and the
 client's bookkeeping of the publishers it holds.
 
-Capabilities import from here (and from conversion / ros_plumbing), never from protocol.py or from each
+Capabilities import from here (and from conversion / plumbing), never from protocol.py or from each
 other, so the dispatcher can be wired up from outside (node.build_context) without an import circle.
 """
 from __future__ import annotations
@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 from typing import Any, Callable, Dict, Optional, Tuple
 
-from .ros_plumbing import SharedPublisher
 
 LEVELS: Dict[str, int] = {"info": 0, "warning": 1, "error": 2, "none": 3}
 COMPRESSIONS: Tuple[str, ...] = ("none", "png", "cbor", "cbor-raw")
@@ -55,7 +54,7 @@ def number(msg: Dict[str, Any], name: str, default: Optional[float], minimum: fl
 
 
 def register_publisher(client: Any, topic: str, type_name: Optional[str], latch: bool,
-                       queue_size: int) -> SharedPublisher:
+                       queue_size: int) -> Any:
     """Take a reference on the shared publisher of `topic` for this client (advertise, implicit publish)."""
     with client.lock:
         pub = client.context.publishers.register(client.id, topic, type_name, latch, queue_size)
@@ -63,7 +62,7 @@ def register_publisher(client: Any, topic: str, type_name: Optional[str], latch:
         return pub
 
 
-def ensure_publisher(client: Any, topic: str, latch: bool) -> SharedPublisher:
+def ensure_publisher(client: Any, topic: str, latch: bool) -> Any:
     """publish without advertise: rosbridge registers implicitly when the topic's type is known."""
     pub = client.context.publishers.get(topic)
     if pub is not None and client.id in pub.clients:

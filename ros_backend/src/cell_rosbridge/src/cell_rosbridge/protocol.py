@@ -17,7 +17,7 @@ from .conversion import ConversionError, UnknownTypeError
 from .encoding import Frame
 from .op_base import LEVELS, Finalizer, Handler, ProtocolError
 from .outbox import CONTROL, ClientOutbox
-from .ros_plumbing import PublisherRegistry, ServiceCallError, TopicError, TopicHub
+from .plumbing import PublisherRegistry, ServiceCallError, TopicError, TopicHub
 
 log = logging.getLogger("rosbridge")
 
@@ -35,6 +35,10 @@ class BridgeConfig:
     publisher_replay_max: int = 100  # messages kept per new publisher (oldest dropped first)
     # A publisher no client holds stays registered this long (rosbridge_suite's unregister_timeout); 0: at once.
     unregister_timeout: float = 10.0
+
+    # What a node parameter of the same name sets (ROS 1: private ~name; ROS 2: node parameter name).
+    TUNABLE = ("max_message_size", "max_client_buffer", "default_queue_length", "service_request_timeout",
+               "publisher_replay_window", "publisher_replay_max", "unregister_timeout")
 
 
 @dataclass

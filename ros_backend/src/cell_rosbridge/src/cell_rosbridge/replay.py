@@ -4,7 +4,7 @@ Why: a ROS subscriber that already exists learns about a new publisher only thro
 connects some milliseconds later; whatever the publisher sends before that is lost. A browser that
 advertises a topic and publishes at once (or publishes without advertising) hits exactly that window.
 
-The buffer is pure bookkeeping (no ROS, no lock: the caller serialises access; ros_plumbing does so
+The buffer is pure bookkeeping (no ROS, no lock: the caller serialises access; plumbing_ros1 does so
 under the rospy publisher's own lock). Each kept message remembers the peers (subscriber connections)
 it already reached, so a peer never gets a message twice, and nothing is kept or replayed once the
 window after the publisher's creation has ended.

@@ -1,6 +1,6 @@
 """One module per rosbridge op; HANDLERS maps op -> handler, FINALIZERS release a client's resources.
 
-The modules import only op_base / conversion / ros_plumbing (never protocol.py or each other);
+The modules import only op_base / conversion / plumbing (never protocol.py or each other);
 `register_all` wires them into a BridgeContext, called by whoever builds the server (node.build_context).
 """
 from __future__ import annotations

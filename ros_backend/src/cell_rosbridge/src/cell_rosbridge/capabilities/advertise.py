@@ -4,7 +4,7 @@ from __future__ import annotations
 from typing import Any, Dict
 
 from ..op_base import check, number, register_publisher, require
-from ..ros_plumbing import resolve_topic
+from ..plumbing import resolve_topic
 
 
 def advertise(client: Any, msg: Dict[str, Any]) -> None:

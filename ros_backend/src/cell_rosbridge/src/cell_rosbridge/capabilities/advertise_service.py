@@ -1,6 +1,6 @@
 """advertise_service / unadvertise_service / service_response: a client serves a ROS service.
 
-ROS callers hit a rospy.Service whose handler forwards the request to the client as a call_service op
+ROS callers hit a ROS service (plumbing.serve) whose handler forwards the request to the client as a call_service op
 and blocks (in rospy's connection thread) until the matching service_response, a timeout, or the
 client going away, which fails every pending call instead of leaving callers hanging.
 """
@@ -10,11 +10,9 @@ import itertools
 import threading
 from typing import Any, Dict, Tuple
 
-import rospy
-
 from .. import conversion
 from ..op_base import ProtocolError, check, require
-from ..ros_plumbing import master, resolve_topic
+from ..plumbing import ServiceFailure, other_providers, resolve_topic, serve
 
 _request_ids = itertools.count(1)
 
@@ -28,28 +26,28 @@ class AdvertisedService:
         self.pending: Dict[str, Tuple[threading.Event, Dict[str, Any]]] = {}
         self.lock = threading.Lock()
         self.closed = False
-        self.service = rospy.Service(name, self.srv_cls, self._handle)
+        self._withdraw = serve(name, self.srv_cls, self._handle)
 
     def _handle(self, request: Any) -> Any:
         rid = f"service_request:{self.name}:{next(_request_ids)}"
         event, slot = threading.Event(), {}
         with self.lock:
             if self.closed:
-                raise rospy.ServiceException(f"service {self.name} is no longer served")
+                raise ServiceFailure(f"service {self.name} is no longer served")
             self.pending[rid] = (event, slot)
         try:
             self.client.send({"op": "call_service", "id": rid, "service": self.name,
                               "args": conversion.msg_to_dict(request)})
             if not event.wait(self.client.context.config.service_request_timeout):
-                raise rospy.ServiceException(f"client did not answer {self.name} in time")
+                raise ServiceFailure(f"client did not answer {self.name} in time")
         finally:
             with self.lock:
                 self.pending.pop(rid, None)
         if slot.get("error"):
-            raise rospy.ServiceException(slot["error"])
+            raise ServiceFailure(slot["error"])
         if not slot.get("result"):
-            raise rospy.ServiceException(f"client reported failure: {slot.get('values')!r}")
-        return conversion.dict_to_msg(self.srv_cls._response_class, slot.get("values") or {})
+            raise ServiceFailure(f"client reported failure: {slot.get('values')!r}")
+        return conversion.dict_to_msg(conversion.response_class(self.srv_cls), slot.get("values") or {})
 
     def respond(self, rid: str, values: Any, result: bool) -> bool:
         with self.lock:
@@ -68,21 +66,14 @@ class AdvertisedService:
         for event, slot in pending:
             slot["error"] = reason
             event.set()
-        self.service.shutdown(reason)
-
-
-def _other_providers(name: str) -> list:
-    """Nodes other than this one serving `name`: the master would silently hand the name to us."""
-    _, _, services = master.getSystemState()
-    me = rospy.get_name()
-    return [n for s, nodes in services if s == name for n in nodes if n != me]
+        self._withdraw(reason)
 
 
 def advertise_service(client: Any, msg: Dict[str, Any]) -> None:
     name = resolve_topic(require(msg, "service", str))
     type_name = require(msg, "type", str)
     ctx = client.context
-    others = _other_providers(name)
+    others = other_providers(name)
     if others:  # a browser must not hijack a real ROS service (e.g. /rosapi/*)
         raise ProtocolError(f"service {name} is already provided by {', '.join(others)}")
     with ctx.lock:

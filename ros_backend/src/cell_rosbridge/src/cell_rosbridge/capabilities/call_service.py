@@ -10,7 +10,7 @@ from typing import Any, Dict
 
 from .. import conversion
 from ..op_base import COMPRESSIONS, ProtocolError, check, number, require
-from ..ros_plumbing import ServiceCallError, call_service as ros_call, resolve_topic
+from ..plumbing import ServiceCallError, call_service as ros_call, resolve_topic
 
 
 def call_service(client: Any, msg: Dict[str, Any]) -> None:

@@ -5,7 +5,7 @@ from typing import Any, Dict, List
 
 from .. import conversion
 from ..op_base import check, ensure_publisher, require
-from ..ros_plumbing import resolve_topic
+from ..plumbing import resolve_topic
 
 
 def publish(client: Any, msg: Dict[str, Any]) -> None:

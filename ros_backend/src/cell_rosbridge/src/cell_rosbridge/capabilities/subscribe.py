@@ -13,7 +13,7 @@ from typing import Any, Dict, Hashable, Optional, Tuple
 
 from ..conversion import normalize_type
 from ..op_base import COMPRESSIONS, ProtocolError, check, number, require
-from ..ros_plumbing import SharedMessage, resolve_topic
+from ..plumbing import SharedMessage, resolve_topic
 
 _anon = itertools.count(1)
 

@@ -1,0 +1,210 @@
+"""The bridge's ROS 2 side (rclpy): shared subscribers and publishers (shared.py) on DDS, service calls and
+services served for a client, the graph from rclpy's queries.
+
+One rclpy node for the whole server (`start`), spun by a multi-threaded executor on threads of its own; the
+WebSocket loop creates and destroys subscriptions, publishers and clients on it (rclpy allows that from any thread).
+
+QoS, as rosbridge_suite's ROS 2 server chooses it: a subscription is reliable unless every publisher of the topic
+is best effort, and transient local when any publisher is (ROS 2's latching: a late subscriber gets the last
+state). An advertise with latch=true makes a transient-local publisher.
+"""
+from __future__ import annotations
+
+import logging
+import threading
+from typing import Any, Callable, Dict, List, Optional
+
+import rclpy
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.executors import MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from . import conversion, shared
+from .shared import ServiceCallError, SharedMessage, TopicError
+
+log = logging.getLogger("rosbridge")
+
+
+class ServiceFailure(RuntimeError):
+    """What a served service's handler raises to fail the ROS caller (ROS 2 has no error reply: see serve)."""
+
+
+class _Runtime:
+    node: Optional[Node] = None
+    executor: Optional[MultiThreadedExecutor] = None
+    thread: Optional[threading.Thread] = None
+    group = ReentrantCallbackGroup()
+
+
+_rt = _Runtime()
+
+
+def start(name: str = "rosbridge_websocket", threads: int = 4) -> Node:
+    """Create the server's node and spin it in the background (idempotent)."""
+    if _rt.node is None:
+        if not rclpy.ok():
+            rclpy.init()
+        _rt.node = Node(name)
+        _rt.executor = MultiThreadedExecutor(num_threads=threads)
+        _rt.executor.add_node(_rt.node)
+        _rt.thread = threading.Thread(target=_rt.executor.spin, name="rclpy executor", daemon=True)
+        _rt.thread.start()
+    return _rt.node
+
+
+def node() -> Node:
+    if _rt.node is None:
+        raise RuntimeError("plumbing_ros2.start() was not called")
+    return _rt.node
+
+
+def stop() -> None:
+    if _rt.executor is not None:
+        _rt.executor.shutdown(timeout_sec=2)
+    if _rt.node is not None:
+        _rt.node.destroy_node()
+    _rt.node = _rt.executor = _rt.thread = None
+    if rclpy.ok():
+        rclpy.shutdown()
+
+
+def _short(type_name: str) -> str:
+    return conversion.normalize_type(type_name)
+
+
+def topic_types() -> Dict[str, str]:
+    """topic -> type ('pkg/Type') for every topic in the graph (published or subscribed)."""
+    return {name: _short(types[0]) for name, types in node().get_topic_names_and_types() if types}
+
+
+def resolve_topic(name: Any) -> str:
+    if not isinstance(name, str) or not name.strip():
+        raise TopicError(f"invalid topic name {name!r}")
+    name = name.strip()
+    resolved = name if name.startswith("/") else "/" + name
+    from rclpy.validate_full_topic_name import validate_full_topic_name
+    try:
+        validate_full_topic_name(resolved)
+    except Exception as exc:
+        raise TopicError(f"illegal ROS name '{name}': {exc}") from None
+    return resolved
+
+
+def _stamp() -> tuple:
+    now = conversion._types.now()
+    return (now.sec, now.nanosec)
+
+
+def subscription_qos(topic: str) -> QoSProfile:
+    """The QoS that hears every publisher of `topic` now in the graph (see the module's text)."""
+    infos = node().get_publishers_info_by_topic(topic)
+    reliable = not infos or any(i.qos_profile.reliability != ReliabilityPolicy.BEST_EFFORT for i in infos)
+    latched = any(i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for i in infos)
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
+                      reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+
+
+class SharedSubscriber(shared.SharedSubscriber):
+    def __init__(self, topic: str, type_name: str, msg_cls: type) -> None:
+        super().__init__(topic, type_name, msg_cls)
+        qos = subscription_qos(topic)
+        self._latching = qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
+        self.sub = node().create_subscription(msg_cls, topic, self._callback, qos, callback_group=_rt.group)
+
+    def _callback(self, msg: Any, info: Any) -> None:
+        gid = info.get("publisher_gid") if isinstance(info, dict) else None
+        publisher = bytes(gid["data"]).hex() if isinstance(gid, dict) and "data" in gid else str(gid)
+        self.deliver(SharedMessage(self.topic, msg, _stamp()), publisher, self._latching)
+
+    def unregister(self) -> None:
+        node().destroy_subscription(self.sub)
+
+
+class TopicHub(shared.TopicHub):
+    subscriber_class = SharedSubscriber
+    topic_types = staticmethod(topic_types)
+
+
+class SharedPublisher:
+    def __init__(self, topic: str, type_name: str, msg_cls: type, latch: bool, queue_size: int,
+                 replay_window: float = 0.0, replay_max: int = 0) -> None:
+        # DDS matches a late subscriber by itself; the replay window of ROS 1 (plumbing_ros1) is not needed.
+        self.topic, self.type_name, self.msg_cls, self.latch = topic, type_name, msg_cls, latch
+        self.clients: set = set()
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=max(1, min(queue_size, 1000)),
+                         reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL if latch else DurabilityPolicy.VOLATILE)
+        self.pub = node().create_publisher(msg_cls, topic, qos)
+
+    def publish(self, msg: Any) -> None:
+        self.pub.publish(msg)
+
+    def unregister(self) -> None:
+        node().destroy_publisher(self.pub)
+
+
+class PublisherRegistry(shared.PublisherRegistry):
+    publisher_class = SharedPublisher
+
+
+def service_types() -> Dict[str, str]:
+    return {name: _short(types[0]) for name, types in node().get_service_names_and_types() if types}
+
+
+def call_service(name: str, args: Any, timeout: float = 30.0) -> tuple:
+    """Blocking call of a ROS 2 service by name; returns (service type, response message)."""
+    type_name = service_types().get(name)
+    if not type_name:
+        raise ServiceCallError(f"service {name} does not exist")
+    srv_cls = conversion.get_service_class(type_name)
+    request = conversion.args_to_request(conversion.request_class(srv_cls), args)
+    client = node().create_client(srv_cls, name, callback_group=_rt.group)
+    try:
+        if not client.wait_for_service(timeout_sec=2.0):
+            raise ServiceCallError(f"service {name} is not reachable")
+        done = threading.Event()
+        future = client.call_async(request)
+        future.add_done_callback(lambda _f: done.set())
+        if not done.wait(timeout):
+            future.cancel()
+            raise ServiceCallError(f"service {name} did not answer within {timeout:g} s")
+        if future.exception() is not None:
+            raise ServiceCallError(f"service {name} failed: {future.exception()}")
+        return type_name, future.result()
+    finally:
+        node().destroy_client(client)
+
+
+def serve(name: str, srv_cls: type, handler: Callable[[Any], Any]) -> Callable[[str], None]:
+    """Offer a ROS 2 service answered by `handler`. ROS 2 services have no error reply: a failure
+    (ServiceFailure) is logged and the caller gets a default response, as rosbridge_suite's ROS 2 server does."""
+    response_cls = conversion.response_class(srv_cls)
+
+    def callback(request: Any, response: Any) -> Any:
+        try:
+            return handler(request)
+        except ServiceFailure as exc:
+            log.warning("service %s failed: %s", name, exc)
+            return response_cls()
+
+    service = node().create_service(srv_cls, name, callback, callback_group=_rt.group)
+    return lambda _reason: node().destroy_service(service)
+
+
+def other_providers(name: str) -> List[str]:
+    """Nodes other than this one serving `name`."""
+    me = node()
+    own = (me.get_name(), me.get_namespace())
+    found = []
+    for node_name, namespace in me.get_node_names_and_namespaces():
+        if (node_name, namespace) == own:
+            continue
+        try:
+            services = me.get_service_names_and_types_by_node(node_name, namespace)
+        except Exception:  # the node left meanwhile
+            continue
+        if any(s == name for s, _ in services):
+            found.append(namespace.rstrip("/") + "/" + node_name)
+    return found
