@@ -23,7 +23,9 @@ step "ros_backend + sim (pytest, live roscore)"
 
 step "ROS 2 Jazzy: our interfaces, and the rosbridge protocol on rclpy, same test bodies as on ROS 1"
 ( source scripts/ros2-env.sh && python -m pytest -q ros_backend/ros2/test/test_interfaces.py \
-    ros_backend/src/cell_rosbridge/test/test_generations.py )
+    ros_backend/src/cell_rosbridge/test/test_generations.py ros_backend/src/cell_rosbridge/test/test_actions_ros2.py \
+    ros_backend/src/cell_nodes/test/test_operation_mode.py ros_backend/src/cell_nodes/test/test_parameters_node.py \
+    ros_backend/ros2/test/test_discovery.py )
 
 step "stack supervisor (node:test)"
 node --test --test-concurrency=1 scripts/test/*.test.js

@@ -13,15 +13,16 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Mapping, Optional
+from typing import Any, List, Mapping, Optional
 
-import rospy
-
+from cell_nodes import wiring
 from conftest import wait_for
-from sim.tests.conftest import NO_MASTER, SimProcess, sim_env
+
+SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
 
 LOG_TAIL = 3000        # characters of a log shown with a failure
 STOP_TIMEOUT_S = 10.0  # after SIGINT, then SIGKILL to the node's session
@@ -29,23 +30,55 @@ STOP_TIMEOUT_S = 10.0  # after SIGINT, then SIGKILL to the node's session
 _running: list["Node"] = []
 
 
+_peer: List[wiring.Wiring] = []
+
+
+def peer(name: str = "node_tests") -> wiring.Wiring:
+    """This test process as a ROS node of the session's generation, through the nodes' own wiring (one per
+    process: another module of the session may have made it, under its name)."""
+    if not _peer:
+        _peer.append(wiring.connect(name, anonymous=True, disable_signals=True))
+    return _peer[0]
+
+
 def service_up(name: str) -> bool:
-    try:
-        rospy.wait_for_service(name, timeout=0.2)
-        return True
-    except rospy.ROSException:
-        return False
+    if wiring.ROS_VERSION == 1:  # no node needed (the master answers), as before any client_node
+        import rospy
+        try:
+            rospy.wait_for_service(name, timeout=0.2)
+            return True
+        except rospy.ROSException:
+            return False
+    return name in {n for n, _ in peer().node.get_service_names_and_types()}  # type: ignore[attr-defined]
 
 
 def client_node(name: str) -> None:
     """Make this test process a ROS node (one per process: another module of the session may have made it)."""
-    if not rospy.core.is_initialized():
-        rospy.init_node(name, anonymous=True, disable_signals=True)
+    peer(name)
 
 
-def start_sim(host: str, *args: str, master: str = NO_MASTER) -> SimProcess:
+def ros2_args(args: List[str]) -> List[str]:
+    """A ROS 1 node's command line (`_param:=value`, `__name:=n`, `from:=to`) in ROS 2 form (`--ros-args -p ...`)."""
+    out: List[str] = []
+    for arg in args:
+        key, sep, value = arg.partition(":=")
+        if not sep:
+            out.append(arg)
+        elif key == "__name":
+            out += ["-r", f"__node:={value}"]
+        elif key.startswith("_") and not key.startswith("__"):
+            out += ["-p", f"{key[1:]}:={value}"]
+        else:
+            out += ["-r", arg]
+    plain = [a for a in out if a not in ("-r", "-p") and ":=" not in a]
+    ros = [a for a in out if a not in plain]
+    return plain + (["--ros-args", *ros] if ros else [])
+
+
+def start_sim(host: str, *args: str, master: Optional[str] = None) -> Any:
     """`python -m sim --host <host> <args>` (no ROS master unless `master`), ready: its controller ports answer."""
-    sim = SimProcess(host, list(args), sim_env(master))
+    from sim.tests.conftest import NO_MASTER, SimProcess, sim_env
+    sim = SimProcess(host, list(args), sim_env(master or NO_MASTER))
     try:
         sim.wait_ready()
     except BaseException:
@@ -67,7 +100,9 @@ class Node:
         fd, path = tempfile.mkstemp(prefix=f"{self.label}-", suffix=".log", dir=os.environ.get("ROS_LOG_DIR"))
         self.log_path = Path(path)
         try:
-            self.proc = subprocess.Popen(["rosrun", "cell_nodes", script, *args], stdout=fd, stderr=subprocess.STDOUT,
+            command = ["rosrun", "cell_nodes", script, *args] if wiring.ROS_VERSION == 1 else \
+                [sys.executable, str(SCRIPTS / script), *ros2_args(list(args))]
+            self.proc = subprocess.Popen(command, stdout=fd, stderr=subprocess.STDOUT,
                                          env=None if env is None else dict(env), start_new_session=True)
         finally:
             os.close(fd)

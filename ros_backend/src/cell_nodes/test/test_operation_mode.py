@@ -1,15 +1,16 @@
-"""Operation mode: the pure state machine, and the node against a live roscore."""
+"""Operation mode: the pure state machine, and the node on a live ROS graph: the node tests' bodies run on ROS 1
+(a roscore) and on ROS 2 (scripts/test-all.sh runs this file under .venv-ros2), the peer through our wiring."""
 from __future__ import annotations
 
 import os
-import subprocess
+import threading
+from typing import Any, List
 
 import pytest
-import rospy
 
 from cell_nodes.operation_mode import OperationMode
 from conftest import wait_for
-from nodes_helpers import Nodes
+from nodes_helpers import Nodes, peer
 
 CELL = os.path.join(os.path.dirname(__file__), "../../../../config/demo-cell.yaml")
 MODES = ["idle", "running", "paused", "alarm", "programming", "manual"]
@@ -43,12 +44,20 @@ def test_state_machine_rejects_bad_initial() -> None:
 
 
 def echo_mode() -> str:
-    out = subprocess.run(["rostopic", "echo", "-n", "1", "/cell/mode/mode"], capture_output=True, text=True, timeout=15)
-    return out.stdout.split("\n")[0].strip().strip('"')
+    """The mode a new subscriber of the topic hears first (the latched one), as `rostopic echo -n 1` would."""
+    from cell_msgs.msg import OperationMode as OperationModeMsg
+    got: List[Any] = []
+    heard = threading.Event()
+    sub = peer().subscribe("/cell/mode", OperationModeMsg, lambda m, _s: (got.append(m), heard.set()), latched=True)
+    try:
+        assert heard.wait(15), "nothing latched on /cell/mode"
+        return got[0].mode
+    finally:
+        sub.close()
 
 
 @pytest.fixture()
-def mode_node(roscore: str):
+def mode_node(ros_graph: str):
     nodes = Nodes()
     node = nodes.run("operation_mode", "operation_mode_node", f"_cell_config:={os.path.abspath(CELL)}",
                      "__name:=operation_mode_test")
@@ -63,8 +72,8 @@ def mode_node(roscore: str):
 def test_node_publishes_latched_mode_and_serves_get_set(mode_node) -> None:
     from cell_msgs.srv import GetMode, SetMode
 
-    get = rospy.ServiceProxy("/cell/get_mode", GetMode)
-    set_ = rospy.ServiceProxy("/cell/set_mode", SetMode)
+    get = peer().client("/cell/get_mode", GetMode)
+    set_ = peer().client("/cell/set_mode", SetMode)
     assert get().mode == "idle"
     assert echo_mode() == "idle"  # latched: a late subscriber gets it
 
@@ -81,10 +90,15 @@ def test_node_publishes_latched_mode_and_serves_get_set(mode_node) -> None:
 
 
 def test_node_adopts_a_mode_published_from_outside(mode_node) -> None:
+    from cell_msgs.msg import OperationMode as OperationModeMsg
     from cell_msgs.srv import GetMode
 
-    get = rospy.ServiceProxy("/cell/get_mode", GetMode)
-    subprocess.run(["rostopic", "pub", "-1", "/cell/mode", "cell_msgs/OperationMode", "{mode: running, source: terminal}"],
-                   check=True, timeout=20, capture_output=True)
-    wait_for(lambda: get().mode == "running", 10, what="mode adopted")
-    assert get().source == "terminal"
+    get = peer().client("/cell/get_mode", GetMode)
+    pub = peer().publisher("/cell/mode", OperationModeMsg, queue_size=1)
+    try:
+        # published until the node hears it (a new publisher's first messages may precede the connection)
+        wait_for(lambda: pub.publish(OperationModeMsg(mode="running", source="terminal")) and get().mode == "running",
+                 10, what="mode adopted")
+        assert get().source == "terminal"
+    finally:
+        pub.close()

@@ -156,3 +156,17 @@ def test_bad_requests_get_a_status_error_and_the_connection_goes_on(connect: Cal
         publish_until(pub, {"data": "still here"}, got, "/gen_alive")
     finally:
         ws.close()
+
+
+def test_a_goal_to_a_missing_action_server_ends_with_a_clear_failure(server: BridgeProcess) -> None:
+    from rb_wsclient import WSClient
+    ws = WSClient(server.port, timeout=10)
+    try:
+        ws.send_json({"op": "send_action_goal", "id": "g1", "action": "/gen_nobody/follow_joint_trajectory",
+                      "action_type": "control_msgs/action/FollowJointTrajectory", "args": {}})
+        out = ws.recv_until(lambda m: isinstance(m, dict) and m.get("id") == "g1", 15)
+        assert out["op"] == "action_result" and out["result"] is False and out["status"] == 0
+        # ROS 2: no server under that name; ROS 1 has no action ops in rosbridge's protocol (its topics instead)
+        assert ("is not available" if ROS_VERSION == 2 else "needs a ROS 2 server") in out["values"]
+    finally:
+        ws.close()

@@ -1,10 +1,9 @@
 """cell_nodes.said over ROS: a text's code and parameters as message fields (diagnostic_msgs/KeyValue), and back
-(the rospy layer)."""
+(the ROS layer, either generation)."""
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
-import rospy
 from cell_msgs.msg import LogEntry
 from diagnostic_msgs.msg import KeyValue
 
@@ -21,7 +20,7 @@ def said(text: str, code: str, params: Sequence[KeyValue]) -> Said:
     return Said(text, code, [(kv.key, kv.value) for kv in params])
 
 
-def log_entry(stamp: rospy.Time, level: str, text: str) -> LogEntry:
+def log_entry(stamp: Any, level: str, text: str) -> LogEntry:
     code, params = key_values(text)
     return LogEntry(stamp=stamp, level=level, text=text, code=code, params=params)
 

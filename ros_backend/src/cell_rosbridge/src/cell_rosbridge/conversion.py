@@ -67,9 +67,9 @@ response_class = _types.response_class
 
 
 def normalize_type(type_name: str) -> str:
-    """Accept 'pkg/msg/Type' (ROS 2 spelling some clients send) as 'pkg/Type'."""
+    """Accept 'pkg/msg/Type' (the ROS 2 spelling; also srv, action) as 'pkg/Type'."""
     parts = type_name.strip().split("/")
-    if len(parts) == 3 and parts[1] in ("msg", "srv"):
+    if len(parts) == 3 and parts[1] in ("msg", "srv", "action"):
         return f"{parts[0]}/{parts[2]}"
     return type_name.strip()
 

@@ -13,7 +13,7 @@ import rosservice
 
 from . import conversion, shared
 from .replay import ReplayBuffer
-from .shared import ServiceCallError, SharedMessage, TopicError
+from .shared import ActionGoalError, ServiceCallError, SharedMessage, TopicError
 
 log = logging.getLogger("rosbridge")
 ServiceFailure = rospy.ServiceException  # what a served service's handler raises to fail the ROS caller
@@ -264,3 +264,10 @@ def other_providers(name: str) -> List[str]:
     _, _, services = master.getSystemState()
     me = rospy.get_name()
     return [n for s, nodes in services if s == name for n in nodes if n != me]
+
+
+def send_action_goal(name: str, type_name: str, args: Any, on_feedback: Callable[[Any], None],
+                     on_handle: Callable[[Any], None]) -> Tuple[int, Any]:
+    """The action ops are rosbridge_suite's ROS 2 protocol: on ROS 1 a client speaks to an action server through
+    its goal, cancel, feedback and result topics (roslib's ActionClient)."""
+    raise ActionGoalError(f"send_action_goal needs a ROS 2 server; on ROS 1 use the topics of {name} (actionlib)")

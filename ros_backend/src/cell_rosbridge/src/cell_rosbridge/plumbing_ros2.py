@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 from typing import Any, Callable, Dict, List, Optional
 
 import rclpy
@@ -21,7 +22,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from . import conversion, shared
-from .shared import ServiceCallError, SharedMessage, TopicError
+from .shared import ActionGoalError, ServiceCallError, SharedMessage, TopicError
 
 log = logging.getLogger("rosbridge")
 
@@ -60,6 +61,10 @@ def node() -> Node:
 
 
 def stop() -> None:
+    with _action_lock:
+        for client in _action_clients.values():
+            client.destroy()
+        _action_clients.clear()
     if _rt.executor is not None:
         _rt.executor.shutdown(timeout_sec=2)
     if _rt.node is not None:
@@ -208,3 +213,83 @@ def other_providers(name: str) -> List[str]:
         if any(s == name for s, _ in services):
             found.append(namespace.rstrip("/") + "/" + node_name)
     return found
+
+
+class _GoalHandle:
+    """What cancel_action_goal holds of a running goal: cancel() asks the server to cancel it."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._handle: Any = None
+        self._cancel_wanted = False
+
+    def attach(self, handle: Any) -> None:
+        with self._lock:
+            self._handle = handle
+            wanted = self._cancel_wanted
+        if wanted:
+            handle.cancel_goal_async()
+
+    def cancel(self) -> None:
+        with self._lock:
+            self._cancel_wanted = True
+            handle = self._handle
+        if handle is not None:
+            handle.cancel_goal_async()
+
+
+def _wait(future: Any, timeout: Optional[float], what: str) -> Any:
+    done = threading.Event()
+    future.add_done_callback(lambda _f: done.set())
+    if not done.wait(timeout):
+        raise ActionGoalError(f"{what}: no answer within {timeout:g} s")
+    if future.exception() is not None:
+        raise ActionGoalError(f"{what}: {future.exception()}")
+    return future.result()
+
+
+def send_action_goal(name: str, type_name: str, args: Any, on_feedback: Callable[[Any], None],
+                     on_handle: Callable[[Any], None], server_timeout: float = 5.0) -> tuple:
+    """Send a goal to the ROS 2 action server `name` and wait for its end; returns (GoalStatus, result message).
+    `on_handle` gets the goal's cancel handle at once (a cancel before the server accepted it applies on accept)."""
+    try:
+        action_cls = conversion._types.load_action(conversion.normalize_type(type_name))
+    except ValueError as exc:
+        raise ActionGoalError(str(exc)) from None
+    if action_cls is None:
+        raise ActionGoalError(f"unknown action type '{type_name}'")
+    goal = conversion.dict_to_msg(action_cls.Goal, args, path="args")
+    handle = _GoalHandle()
+    on_handle(handle)
+    client = _action_client(name, action_cls)
+    if not client.wait_for_server(timeout_sec=server_timeout):
+        raise ActionGoalError(f"action server {name} is not available")
+    # A new client's feedback subscription may not be matched yet when the server sends its first feedback
+    # (volatile QoS drops it): wait, briefly, until the graph shows the two ends of the feedback topic.
+    feedback_topic = f"{name.rstrip('/')}/_action/feedback"
+    deadline = time.monotonic() + 1.0
+    while node().count_publishers(feedback_topic) == 0 and time.monotonic() < deadline:
+        threading.Event().wait(0.01)
+    goal_handle = _wait(client.send_goal_async(goal, feedback_callback=lambda fb: on_feedback(fb.feedback)),
+                        30.0, f"goal to {name}")
+    if not goal_handle.accepted:
+        raise ActionGoalError(f"goal to {name} was rejected")
+    handle.attach(goal_handle)
+    response = _wait(goal_handle.get_result_async(), None, f"result of {name}")
+    return response.status, response.result
+
+
+_action_clients: Dict[tuple, Any] = {}
+_action_lock = threading.Lock()
+
+
+def _action_client(name: str, action_cls: type) -> Any:
+    """One action client per action and type for the server's life: a client made per goal is a new DDS reader
+    each time, which the server's first feedback of that goal may not reach."""
+    from rclpy.action import ActionClient
+    with _action_lock:
+        client = _action_clients.get((name, action_cls))
+        if client is None:
+            client = _action_clients[(name, action_cls)] = ActionClient(node(), action_cls, name,
+                                                                        callback_group=_rt.group)
+        return client

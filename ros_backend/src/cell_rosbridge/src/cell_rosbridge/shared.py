@@ -27,6 +27,10 @@ class ServiceCallError(RuntimeError):
     pass
 
 
+class ActionGoalError(RuntimeError):
+    """A goal that could not run: no such server, rejected, the client library failed."""
+
+
 class SharedMessage:
     """One received ROS message plus its encodings, each computed at most once (thread-safe)."""
 

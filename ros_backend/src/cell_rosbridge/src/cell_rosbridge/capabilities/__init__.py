@@ -8,7 +8,7 @@ from __future__ import annotations
 from typing import Dict, List, Protocol
 
 from ..op_base import Finalizer, Handler
-from . import advertise, advertise_service, call_service, fragment, publish, status, subscribe
+from . import action_goal, advertise, advertise_service, call_service, fragment, publish, status, subscribe
 
 HANDLERS: Dict[str, Handler] = {
     "advertise": advertise.advertise,
@@ -24,9 +24,11 @@ HANDLERS: Dict[str, Handler] = {
     "status": status.ignore,  # server->client op; a client echoing one is harmless
     "auth": status.ignore,  # authentication is done by the BFF in front of us (spec: may be ignored)
     "fragment": fragment.fragment,
+    "send_action_goal": action_goal.send_action_goal,
+    "cancel_action_goal": action_goal.cancel_action_goal,
 }
 
-FINALIZERS: List[Finalizer] = [subscribe.finish, advertise.finish, advertise_service.finish]
+FINALIZERS: List[Finalizer] = [subscribe.finish, advertise.finish, advertise_service.finish, action_goal.finish]
 
 
 class Registry(Protocol):

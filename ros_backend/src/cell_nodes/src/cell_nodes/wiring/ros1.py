@@ -1,0 +1,125 @@
+"""The nodes' wiring on ROS 1 (rospy)."""
+from __future__ import annotations
+
+from typing import Any, Callable, List, Optional
+
+import rospy
+
+from .. import ros_publish
+from .api import ServiceError
+
+
+class _Closer:
+    def __init__(self, close: Callable[[], None]) -> None:
+        self._close: Optional[Callable[[], None]] = close
+
+    def close(self) -> None:
+        close, self._close = self._close, None
+        if close is not None:
+            close()
+
+
+class _Publisher:
+    def __init__(self, pub: rospy.Publisher) -> None:
+        self.pub = pub
+
+    def publish(self, msg: Any) -> bool:
+        return ros_publish.publish(self.pub, msg)
+
+    def close(self) -> None:
+        self.pub.unregister()
+
+
+class _Client:
+    def __init__(self, name: str, srv_cls: type) -> None:
+        self.name, self.srv_cls = name, srv_cls
+        self.proxy = rospy.ServiceProxy(name, srv_cls)
+
+    def wait(self, timeout: float) -> bool:
+        try:
+            rospy.wait_for_service(self.name, timeout=timeout)
+            return True
+        except rospy.ROSException:
+            return False
+
+    def __call__(self, request: Any = None, timeout: float = 10.0, **fields: Any) -> Any:
+        if request is None:
+            request = self.srv_cls._request_class(**fields)
+        if not self.wait(timeout):
+            raise ServiceError(f"service {self.name} is not available")
+        try:
+            return self.proxy.call(request)
+        except (rospy.ServiceException, rospy.ROSException) as exc:
+            raise ServiceError(f"service {self.name} failed: {exc}") from exc
+
+    def close(self) -> None:
+        self.proxy.close()
+
+
+class Ros1Wiring:
+    ros_version = 1
+
+    def __init__(self, name: str, argv: Optional[List[str]] = None, anonymous: bool = False,
+                 disable_signals: bool = False) -> None:
+        if not rospy.core.is_initialized():
+            rospy.init_node(name, argv=argv, anonymous=anonymous, disable_signals=disable_signals)
+        self.name = rospy.get_name()
+
+    def param(self, name: str, default: Any) -> Any:
+        return rospy.get_param("~" + name, default)
+
+    def publisher(self, topic: str, msg_cls: type, latch: bool = False, queue_size: int = 10) -> _Publisher:
+        return _Publisher(rospy.Publisher(topic, msg_cls, latch=latch, queue_size=queue_size))
+
+    def subscribe(self, topic: str, msg_cls: type, callback: Callable[[Any, str], None], queue_size: int = 10,
+                  latched: bool = False) -> _Closer:
+        def on_message(msg: Any) -> None:
+            header = getattr(msg, "_connection_header", None) or {}
+            callback(msg, str(header.get("callerid", "")))
+
+        sub = rospy.Subscriber(topic, msg_cls, on_message, queue_size=queue_size)
+        return _Closer(sub.unregister)
+
+    def service(self, name: str, srv_cls: type, handler: Callable[[Any], Any]) -> _Closer:
+        svc = rospy.Service(name, srv_cls, handler)
+        return _Closer(lambda: svc.shutdown("closed"))
+
+    def client(self, name: str, srv_cls: type) -> _Client:
+        return _Client(name, srv_cls)
+
+    def request(self, srv_cls: type, **fields: Any) -> Any:
+        return srv_cls._request_class(**fields)
+
+    def response(self, srv_cls: type, **fields: Any) -> Any:
+        return srv_cls._response_class(**fields)
+
+    def timer(self, period: float, callback: Callable[[], None]) -> _Closer:
+        timer = rospy.Timer(rospy.Duration.from_sec(period), lambda _event: callback())
+        return _Closer(timer.shutdown)
+
+    def now(self) -> float:
+        return rospy.get_time()
+
+    def stamp(self, seconds: float) -> Any:
+        return rospy.Time.from_sec(seconds)
+
+    def seconds(self, stamp: Any) -> float:
+        return stamp.to_sec()
+
+    def info(self, text: str, *args: Any) -> None:
+        rospy.loginfo(text, *args)
+
+    def warn(self, text: str, *args: Any) -> None:
+        rospy.logwarn(text, *args)
+
+    def error(self, text: str, *args: Any) -> None:
+        rospy.logerr(text, *args)
+
+    def ok(self) -> bool:
+        return not rospy.is_shutdown()
+
+    def spin(self) -> None:
+        rospy.spin()
+
+    def shutdown(self, reason: str = "") -> None:
+        rospy.signal_shutdown(reason or "shutdown")

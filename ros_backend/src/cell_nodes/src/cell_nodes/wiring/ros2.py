@@ -1,0 +1,205 @@
+"""The nodes' wiring on ROS 2 (rclpy): one node, spun by a multi-threaded executor (callbacks may block, as rospy's
+own threads let them), node parameters, transient local for what ROS 1 latched.
+
+Signals: SIGINT and SIGTERM end `spin` (rclpy's default handler takes SIGINT; SIGTERM, the supervisor's stop, is
+added here), as a rospy node ends on both.
+"""
+from __future__ import annotations
+
+import signal
+import threading
+import time
+from typing import Any, Callable, Dict, List, Optional
+
+import rclpy
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from .api import ServiceError
+
+
+def qos(depth: int, latch: bool) -> QoSProfile:
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=max(1, depth), reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latch else DurabilityPolicy.VOLATILE)
+
+
+class _Closer:
+    def __init__(self, close: Callable[[], None]) -> None:
+        self._close: Optional[Callable[[], None]] = close
+
+    def close(self) -> None:
+        close, self._close = self._close, None
+        if close is not None:
+            close()
+
+
+class _Publisher:
+    def __init__(self, wiring: "Ros2Wiring", pub: Any) -> None:
+        self._wiring, self.pub = wiring, pub
+
+    def publish(self, msg: Any) -> bool:
+        if not self._wiring.ok():
+            return False
+        try:
+            self.pub.publish(msg)
+            return True
+        except Exception:  # rclpy raises on a context already shut down: the node is stopping
+            if not self._wiring.ok():
+                return False
+            raise
+
+    def close(self) -> None:
+        self._wiring.node.destroy_publisher(self.pub)
+
+
+class _Client:
+    def __init__(self, wiring: "Ros2Wiring", name: str, srv_cls: type) -> None:
+        self._wiring, self.name, self.srv_cls = wiring, name, srv_cls
+        self.client = wiring.node.create_client(srv_cls, name, callback_group=wiring.group)
+
+    def wait(self, timeout: float) -> bool:
+        return bool(self.client.wait_for_service(timeout_sec=timeout))
+
+    def __call__(self, request: Any = None, timeout: float = 10.0, **fields: Any) -> Any:
+        if request is None:
+            request = self.srv_cls.Request(**fields)
+        deadline = time.monotonic() + timeout
+        if not self.wait(timeout):
+            raise ServiceError(f"service {self.name} is not available")
+        done = threading.Event()
+        future = self.client.call_async(request)
+        future.add_done_callback(lambda _f: done.set())
+        if not done.wait(max(0.0, deadline - time.monotonic())):
+            future.cancel()
+            raise ServiceError(f"service {self.name} did not answer within {timeout:g} s")
+        if future.exception() is not None:
+            raise ServiceError(f"service {self.name} failed: {future.exception()}")
+        return future.result()
+
+    def close(self) -> None:
+        self._wiring.node.destroy_client(self.client)
+
+
+class Ros2Wiring:
+    ros_version = 2
+
+    def __init__(self, name: str, argv: Optional[List[str]] = None, anonymous: bool = False,
+                 disable_signals: bool = False, threads: int = 4) -> None:
+        if not rclpy.ok():
+            rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO
+                       if disable_signals else rclpy.signals.SignalHandlerOptions.ALL)
+        if anonymous:
+            name = f"{name}_{id(self) & 0xffffff:x}"
+        self.node = Node(name, allow_undeclared_parameters=True,
+                         automatically_declare_parameters_from_overrides=True)
+        ns = self.node.get_namespace().rstrip("/")
+        self.name = f"{ns}/{self.node.get_name()}"
+        self.group = ReentrantCallbackGroup()
+        self._executor = MultiThreadedExecutor(num_threads=threads)
+        self._executor.add_node(self.node)
+        self._spinner: Optional[threading.Thread] = None
+        self._senders: Dict[bytes, str] = {}
+        self._stopping = threading.Event()
+        if not disable_signals:
+            signal.signal(signal.SIGTERM, lambda *_: self.shutdown("SIGTERM"))
+        # Callbacks run from the start (a service may be called before spin()), as rospy's do.
+        self._spinner = threading.Thread(target=self._spin, name="rclpy executor", daemon=True)
+        self._spinner.start()
+
+    def _spin(self) -> None:
+        try:
+            self._executor.spin()
+        except (ExternalShutdownException, KeyboardInterrupt):
+            pass
+        finally:
+            self._stopping.set()
+
+    def param(self, name: str, default: Any) -> Any:
+        if self.node.has_parameter(name):
+            value = self.node.get_parameter(name).value
+            return default if value is None else value
+        return default
+
+    def publisher(self, topic: str, msg_cls: type, latch: bool = False, queue_size: int = 10) -> _Publisher:
+        return _Publisher(self, self.node.create_publisher(msg_cls, topic, qos(queue_size, latch)))
+
+    def _sender(self, topic: str, info: Any) -> str:
+        gid = info.get("publisher_gid") if isinstance(info, dict) else None
+        data = bytes(gid["data"]) if isinstance(gid, dict) and "data" in gid else None
+        if data is None:
+            return ""
+        name = self._senders.get(data)
+        if name is None:
+            for endpoint in self.node.get_publishers_info_by_topic(topic):
+                if bytes(endpoint.endpoint_gid)[:len(data)] == data[:len(bytes(endpoint.endpoint_gid))]:
+                    ns = endpoint.node_namespace.rstrip("/")
+                    name = self._senders[data] = f"{ns}/{endpoint.node_name}"
+                    break
+        return name or ""
+
+    def subscribe(self, topic: str, msg_cls: type, callback: Callable[[Any, str], None], queue_size: int = 10,
+                  latched: bool = False) -> _Closer:
+        def on_message(msg: Any, info: Any) -> None:
+            callback(msg, self._sender(topic, info))
+
+        sub = self.node.create_subscription(msg_cls, topic, on_message, qos(queue_size, latched),
+                                            callback_group=self.group)
+        return _Closer(lambda: self.node.destroy_subscription(sub))
+
+    def service(self, name: str, srv_cls: type, handler: Callable[[Any], Any]) -> _Closer:
+        svc = self.node.create_service(srv_cls, name, lambda request, _response: handler(request),
+                                       callback_group=self.group)
+        return _Closer(lambda: self.node.destroy_service(svc))
+
+    def client(self, name: str, srv_cls: type) -> _Client:
+        return _Client(self, name, srv_cls)
+
+    def request(self, srv_cls: type, **fields: Any) -> Any:
+        return srv_cls.Request(**fields)
+
+    def response(self, srv_cls: type, **fields: Any) -> Any:
+        return srv_cls.Response(**fields)
+
+    def timer(self, period: float, callback: Callable[[], None]) -> _Closer:
+        timer = self.node.create_timer(period, callback, callback_group=self.group)
+        return _Closer(lambda: self.node.destroy_timer(timer))
+
+    def now(self) -> float:
+        return self.node.get_clock().now().nanoseconds / 1e9
+
+    def stamp(self, seconds: float) -> Any:
+        from builtin_interfaces.msg import Time
+        ns = int(round(seconds * 1e9))
+        return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+    def seconds(self, stamp: Any) -> float:
+        return stamp.sec + stamp.nanosec / 1e9
+
+    def info(self, text: str, *args: Any) -> None:
+        self.node.get_logger().info(text % args if args else text)
+
+    def warn(self, text: str, *args: Any) -> None:
+        self.node.get_logger().warning(text % args if args else text)
+
+    def error(self, text: str, *args: Any) -> None:
+        self.node.get_logger().error(text % args if args else text)
+
+    def ok(self) -> bool:
+        return rclpy.ok() and not self._stopping.is_set()
+
+    def spin(self) -> None:
+        try:
+            while self.ok():
+                self._stopping.wait(0.2)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            self.shutdown("spin ended")
+
+    def shutdown(self, reason: str = "") -> None:
+        self._stopping.set()
+        self._executor.shutdown(timeout_sec=1.0)
+        if rclpy.ok():
+            rclpy.try_shutdown()
