@@ -69,15 +69,20 @@ if want catkin && { ! fresh catkin "$s" || [[ ! -f ros_backend/devel/setup.bash 
 fi
 
 # 5. ROS 2 Jazzy: a venv of its own (rosidl and genpy make Python packages of the same names) and our interfaces
-# built for it from the same definitions (ros_backend/ros2/build_interfaces.py)
-s=$( (cat requirements-ros2.txt; find ros_backend/ros2 ros_backend/src/cell_msgs -type f -not -name '*.pyc' | sort | xargs cat) | sha256sum | cut -c1-16)
-if want ros2 && { ! fresh ros2 "$s" || [[ ! -d ros_backend/install-ros2/share/cell_msgs ]]; }; then
-  log "ROS 2 Jazzy venv and interfaces"
+# built for it from the same definitions (ros_backend/ros2/build_interfaces.py); each step reruns only on its inputs
+s=$(stamp_of requirements-ros2.txt)
+if want ros2 && { ! fresh ros2-pip "$s" || [[ ! -x .venv-ros2/bin/python ]]; }; then
+  log "ROS 2 Jazzy venv"
   [[ -x .venv-ros2/bin/python ]] || /usr/bin/python3 -m venv .venv-ros2
   .venv-ros2/bin/python -m pip install -q --disable-pip-version-check -r requirements-ros2.txt >"$STATE/ros2.log" 2>&1 \
     || { tail -40 "$STATE/ros2.log" >&2; exit 1; }
+  mark ros2-pip "$s"
+fi
+s=$( (cat requirements-ros2.txt; find ros_backend/ros2/build_interfaces.py ros_backend/ros2/interfaces ros_backend/src/cell_msgs -type f | sort | xargs cat) | sha256sum | cut -c1-16)
+if want ros2 && { ! fresh ros2 "$s" || [[ ! -d ros_backend/install-ros2/share/cell_msgs ]]; }; then
+  log "ROS 2 interfaces"
   .venv-ros2/bin/python ros_backend/ros2/build_interfaces.py --venv .venv-ros2 --prefix ros_backend/install-ros2 \
-    --build "$STATE/ros2-build" >>"$STATE/ros2.log" 2>&1 || { tail -40 "$STATE/ros2.log" >&2; exit 1; }
+    --build "$STATE/ros2-build" >"$STATE/ros2-build.log" 2>&1 || { tail -40 "$STATE/ros2-build.log" >&2; exit 1; }
   mark ros2 "$s"
 fi
 

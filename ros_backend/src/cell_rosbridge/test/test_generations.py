@@ -170,3 +170,48 @@ def test_a_goal_to_a_missing_action_server_ends_with_a_clear_failure(server: Bri
         assert ("is not available" if ROS_VERSION == 2 else "needs a ROS 2 server") in out["values"]
     finally:
         ws.close()
+
+
+@pytest.fixture(scope="module")
+def rosapi_node(ros_graph: str) -> Iterator[None]:
+    import os
+    import subprocess
+    import sys
+    from rb_helpers import ROSAPI
+    proc = subprocess.Popen([sys.executable, str(ROSAPI)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            start_new_session=True, env=dict(os.environ))
+    yield None
+    proc.terminate()
+    assert proc.wait(10) is not None
+
+
+def test_rosapi_answers_under_its_names(connect: Callable[[], roslibpy.Ros], rosapi_node: None) -> None:
+    ros = connect()
+    pub = roslibpy.Topic(connect(), "/gen_api_topic", "std_msgs/String")
+    pub.advertise()
+
+    def listed() -> bool:
+        try:
+            return "/gen_api_topic" in ros.get_topics()
+        except Exception:  # rosapi still starting: its services are not there yet
+            return False
+
+    wait_for(listed, 20, what="/gen_api_topic in /rosapi/topics")
+    short = {1: "std_msgs/String", 2: "std_msgs/msg/String"}[ROS_VERSION]  # each generation's own spelling
+    assert ros.get_topic_type("/gen_api_topic") == short
+    assert "/rosapi/topics" in ros.get_services()
+    assert ros.get_service_type("/rosapi/topics").endswith("/Topics")
+    assert "/rosapi" in ros.get_nodes()
+    header = {1: "std_msgs/Header", 2: "std_msgs/msg/Header"}[ROS_VERSION]
+    typedefs = ros.get_message_details(header)["typedefs"]
+    assert typedefs[0]["type"] == header and {"stamp", "frame_id"} <= set(typedefs[0]["fieldnames"])
+
+
+def test_a_byte_field_is_a_number_on_the_wire(connect: Callable[[], roslibpy.Ros]) -> None:
+    """diagnostic_msgs' `byte level`: int8 on ROS 1, an octet (one bytes object in rclpy) on ROS 2."""
+    a, b = connect(), connect()
+    got = collect(b, "/gen_diagnostics", "diagnostic_msgs/DiagnosticArray")
+    pub = roslibpy.Topic(a, "/gen_diagnostics", "diagnostic_msgs/DiagnosticArray")
+    pub.advertise()
+    publish_until(pub, {"status": [{"level": 2, "name": "gen: widget", "message": "broken"}]}, got, "/gen_diagnostics")
+    assert got[0]["status"][0]["level"] == 2 and got[0]["status"][0]["name"] == "gen: widget"

@@ -136,6 +136,8 @@ def _value_to_wire(value: Any, base: str, is_array: bool, cbor: bool) -> Any:
         return [msg_to_dict(v, cbor) for v in value]
     if base in FLOAT_TYPES:
         return value if cbor else _json_float(value)
+    if isinstance(value, bytes):  # a ROS 2 octet (`byte`): one byte, an int on the wire
+        return value[0] if value else 0
     if base in PRIMITIVES:
         return value
     if base in TIME_TYPES:
@@ -221,6 +223,10 @@ def _wire_to_value(value: Any, slot_type: str, base: str, is_array: bool, length
         if isinstance(value, int) and value in (0, 1):
             return bool(value)
         raise ConversionError(path, f"expected bool, got {type(value).__name__}")
+    if base == "byte" and ROS_VERSION == 2:  # octet: 0..255 on the wire, one bytes object in rclpy
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 255:
+            raise ConversionError(path, f"expected a byte 0..255, got {value!r}")
+        return bytes([value])
     if base in INT_RANGES:
         if isinstance(value, bool) or not isinstance(value, int):
             if isinstance(value, float) and value.is_integer():

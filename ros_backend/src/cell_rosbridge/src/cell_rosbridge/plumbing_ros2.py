@@ -21,6 +21,9 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from cell_nodes.wiring.api import ServiceError
+from cell_nodes.wiring.ros2 import call as ros2_call
+
 from . import conversion, shared
 from .shared import ActionGoalError, ServiceCallError, SharedMessage, TopicError
 
@@ -61,10 +64,13 @@ def node() -> Node:
 
 
 def stop() -> None:
-    with _action_lock:
+    with _clients_lock:
         for client in _action_clients.values():
             client.destroy()
         _action_clients.clear()
+        for service_client in _service_clients.values():
+            node().destroy_client(service_client)
+        _service_clients.clear()
     if _rt.executor is not None:
         _rt.executor.shutdown(timeout_sec=2)
     if _rt.node is not None:
@@ -165,21 +171,26 @@ def call_service(name: str, args: Any, timeout: float = 30.0) -> tuple:
         raise ServiceCallError(f"service {name} does not exist")
     srv_cls = conversion.get_service_class(type_name)
     request = conversion.args_to_request(conversion.request_class(srv_cls), args)
-    client = node().create_client(srv_cls, name, callback_group=_rt.group)
-    try:
-        if not client.wait_for_service(timeout_sec=2.0):
-            raise ServiceCallError(f"service {name} is not reachable")
-        done = threading.Event()
-        future = client.call_async(request)
-        future.add_done_callback(lambda _f: done.set())
-        if not done.wait(timeout):
-            future.cancel()
-            raise ServiceCallError(f"service {name} did not answer within {timeout:g} s")
-        if future.exception() is not None:
-            raise ServiceCallError(f"service {name} failed: {future.exception()}")
-        return type_name, future.result()
-    finally:
-        node().destroy_client(client)
+    client = _service_client(name, srv_cls)
+    if not client.wait_for_service(timeout_sec=2.0):
+        raise ServiceCallError(f"service {name} is not reachable")
+    try:  # the first call to a new server may be sent twice: see cell_nodes.wiring.ros2.call
+        return type_name, ros2_call(node(), client, name, request, timeout)
+    except ServiceError as exc:
+        raise ServiceCallError(str(exc)) from None
+
+
+_service_clients: Dict[tuple, Any] = {}
+
+
+def _service_client(name: str, srv_cls: type) -> Any:
+    """One client per service and type for the server's life (rclpy clients are safe to share between threads): a
+    client made per call is a new pair of DDS endpoints each time, each to be matched before it can be answered."""
+    with _clients_lock:
+        client = _service_clients.get((name, srv_cls))
+        if client is None:
+            client = _service_clients[(name, srv_cls)] = node().create_client(srv_cls, name, callback_group=_rt.group)
+        return client
 
 
 def serve(name: str, srv_cls: type, handler: Callable[[Any], Any]) -> Callable[[str], None]:
@@ -280,14 +291,14 @@ def send_action_goal(name: str, type_name: str, args: Any, on_feedback: Callable
 
 
 _action_clients: Dict[tuple, Any] = {}
-_action_lock = threading.Lock()
+_clients_lock = threading.Lock()
 
 
 def _action_client(name: str, action_cls: type) -> Any:
     """One action client per action and type for the server's life: a client made per goal is a new DDS reader
     each time, which the server's first feedback of that goal may not reach."""
     from rclpy.action import ActionClient
-    with _action_lock:
+    with _clients_lock:
         client = _action_clients.get((name, action_cls))
         if client is None:
             client = _action_clients[(name, action_cls)] = ActionClient(node(), action_cls, name,

@@ -77,6 +77,12 @@ class Wiring(Protocol):
     def ok(self) -> bool:
         """False once the node is shutting down."""
 
+    def sleep(self, seconds: float) -> bool:
+        """Wait `seconds`, or less if the node shuts down meanwhile; whether it still runs."""
+
+    def wait_for_message(self, topic: str, msg_cls: type, timeout: float) -> Any:
+        """The next message on `topic` (subscribed only while waiting), or None after `timeout` or at shutdown."""
+
     def spin(self) -> None:
         """Serve callbacks until the node is shut down (SIGINT, SIGTERM or shutdown())."""
 

@@ -118,6 +118,19 @@ class Ros1Wiring:
     def ok(self) -> bool:
         return not rospy.is_shutdown()
 
+    def sleep(self, seconds: float) -> bool:
+        try:
+            rospy.sleep(seconds)
+        except rospy.ROSInterruptException:
+            return False
+        return self.ok()
+
+    def wait_for_message(self, topic: str, msg_cls: type, timeout: float) -> Any:
+        try:
+            return rospy.wait_for_message(topic, msg_cls, timeout=timeout)
+        except rospy.ROSException:  # timed out, or shutting down
+            return None
+
     def spin(self) -> None:
         rospy.spin()
 

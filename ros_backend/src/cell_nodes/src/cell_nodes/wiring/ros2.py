@@ -1,8 +1,8 @@
 """The nodes' wiring on ROS 2 (rclpy): one node, spun by a multi-threaded executor (callbacks may block, as rospy's
 own threads let them), node parameters, transient local for what ROS 1 latched.
 
-Signals: SIGINT and SIGTERM end `spin` (rclpy's default handler takes SIGINT; SIGTERM, the supervisor's stop, is
-added here), as a rospy node ends on both.
+Signals: SIGINT and SIGTERM shut the node down (ok() turns False, spin and sleep return), as a rospy node ends on
+both; rclpy's own handler is not installed (it would raise KeyboardInterrupt in whatever the main thread does).
 """
 from __future__ import annotations
 
@@ -54,6 +54,48 @@ class _Publisher:
         self._wiring.node.destroy_publisher(self.pub)
 
 
+# A request to a server this process has not had an answer from yet can be lost: the client sees the server in the
+# graph before DDS matched the request and response endpoints both ways (Fast DDS resends lost discovery data on its
+# heartbeat, seconds later), and rmw drops a response to a reader the server has not matched. Measured here: ~1 in 7
+# first calls after a server restart never answered. So until a server (by its response writer's id) has answered
+# once, a call is sent again after FIRST_ANSWER_S without an answer (at least once, for that first call only; later
+# calls are sent once). Our services' first calls are reads or idempotent sets (a mode, parameter values).
+FIRST_ANSWER_S = 1.0
+_answered: set = set()
+_answered_lock = threading.Lock()
+
+
+def _servers(node: Node, service: str) -> List[bytes]:
+    topic = f"rr{service if service.startswith('/') else '/' + service}Reply"
+    return [bytes(i.endpoint_gid) for i in node.get_publishers_info_by_topic(topic, no_mangle=True)]
+
+
+def call(node: Node, client: Any, service: str, request: Any, timeout: float) -> Any:
+    """Call through an rclpy client, waiting at most `timeout` s; the response, or ServiceError (see above)."""
+    deadline = time.monotonic() + timeout
+    if not client.wait_for_service(timeout_sec=timeout):
+        raise ServiceError(f"service {service} is not available")
+    servers = _servers(node, service)
+    with _answered_lock:
+        known = bool(servers) and all(s in _answered for s in servers)
+    while True:
+        done = threading.Event()
+        future = client.call_async(request)
+        future.add_done_callback(lambda _f: done.set())
+        left = max(0.0, deadline - time.monotonic())
+        if done.wait(left if known else min(left, FIRST_ANSWER_S)):
+            break
+        future.cancel()
+        if known or time.monotonic() >= deadline:
+            raise ServiceError(f"service {service} did not answer within {timeout:g} s")
+        known = True  # the one more try runs until the deadline
+    if future.exception() is not None:
+        raise ServiceError(f"service {service} failed: {future.exception()}")
+    with _answered_lock:
+        _answered.update(servers)
+    return future.result()
+
+
 class _Client:
     def __init__(self, wiring: "Ros2Wiring", name: str, srv_cls: type) -> None:
         self._wiring, self.name, self.srv_cls = wiring, name, srv_cls
@@ -65,18 +107,7 @@ class _Client:
     def __call__(self, request: Any = None, timeout: float = 10.0, **fields: Any) -> Any:
         if request is None:
             request = self.srv_cls.Request(**fields)
-        deadline = time.monotonic() + timeout
-        if not self.wait(timeout):
-            raise ServiceError(f"service {self.name} is not available")
-        done = threading.Event()
-        future = self.client.call_async(request)
-        future.add_done_callback(lambda _f: done.set())
-        if not done.wait(max(0.0, deadline - time.monotonic())):
-            future.cancel()
-            raise ServiceError(f"service {self.name} did not answer within {timeout:g} s")
-        if future.exception() is not None:
-            raise ServiceError(f"service {self.name} failed: {future.exception()}")
-        return future.result()
+        return call(self._wiring.node, self.client, self.name, request, timeout)
 
     def close(self) -> None:
         self._wiring.node.destroy_client(self.client)
@@ -88,8 +119,7 @@ class Ros2Wiring:
     def __init__(self, name: str, argv: Optional[List[str]] = None, anonymous: bool = False,
                  disable_signals: bool = False, threads: int = 4) -> None:
         if not rclpy.ok():
-            rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO
-                       if disable_signals else rclpy.signals.SignalHandlerOptions.ALL)
+            rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
         if anonymous:
             name = f"{name}_{id(self) & 0xffffff:x}"
         self.node = Node(name, allow_undeclared_parameters=True,
@@ -102,8 +132,10 @@ class Ros2Wiring:
         self._spinner: Optional[threading.Thread] = None
         self._senders: Dict[bytes, str] = {}
         self._stopping = threading.Event()
+        self._closed = False
         if not disable_signals:
-            signal.signal(signal.SIGTERM, lambda *_: self.shutdown("SIGTERM"))
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                signal.signal(sig, lambda number, _frame: self.shutdown(signal.Signals(number).name))
         # Callbacks run from the start (a service may be called before spin()), as rospy's do.
         self._spinner = threading.Thread(target=self._spin, name="rclpy executor", daemon=True)
         self._spinner.start()
@@ -189,6 +221,22 @@ class Ros2Wiring:
     def ok(self) -> bool:
         return rclpy.ok() and not self._stopping.is_set()
 
+    def sleep(self, seconds: float) -> bool:
+        self._stopping.wait(seconds)
+        return self.ok()
+
+    def wait_for_message(self, topic: str, msg_cls: type, timeout: float) -> Any:
+        got: List[Any] = []
+        heard = threading.Event()
+        sub = self.subscribe(topic, msg_cls, lambda msg, _sender: (got.append(msg), heard.set()), queue_size=1)
+        try:
+            deadline = time.monotonic() + timeout
+            while not heard.is_set() and self.ok() and time.monotonic() < deadline:
+                heard.wait(min(0.1, max(0.0, deadline - time.monotonic())))
+            return got[0] if got else None
+        finally:
+            sub.close()
+
     def spin(self) -> None:
         try:
             while self.ok():
@@ -199,7 +247,13 @@ class Ros2Wiring:
             self.shutdown("spin ended")
 
     def shutdown(self, reason: str = "") -> None:
+        if self._stopping.is_set() and self._closed:
+            return
         self._stopping.set()
         self._executor.shutdown(timeout_sec=1.0)
+        if not self._closed:
+            self._closed = True
+            # The node's endpoints leave the graph now (peers hear it at once), not when DDS's lease runs out.
+            self.node.destroy_node()
         if rclpy.ok():
             rclpy.try_shutdown()
