@@ -124,3 +124,12 @@ def test_a_client_that_leaves_cancels_its_goal(server: BridgeProcess, action_ser
         assert messages_until_result(watcher, "after")[-1]["status"] == 4
     finally:
         watcher.close()
+
+
+def test_roslibjs_talks_to_the_ros2_server(server: BridgeProcess, action_server: subprocess.Popen) -> None:
+    """roslib 2.x, the app's own client library (its Action class speaks the action ops), under Node."""
+    from rb_helpers import ROOT
+    proc = subprocess.run(["node", str(Path(__file__).with_name("roslib_ros2.mjs")), str(server.port), server.name],
+                          cwd=ROOT, capture_output=True, text=True, timeout=60)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0 and "ALL OK" in out and out.count("ok ") >= 4, out

@@ -1,12 +1,24 @@
 """The interface every node's wiring is written against (implemented by ros1.py and ros2.py)."""
 from __future__ import annotations
 
-from typing import Any, Callable, Protocol
+from typing import Any, Callable, Optional, Protocol
 
 
 class Handle(Protocol):
     def close(self) -> None:
         """End it (unsubscribe, withdraw the service, stop the timer); idempotent."""
+
+
+class Closer:
+    """A Handle that runs `close` once."""
+
+    def __init__(self, close: Callable[[], None]) -> None:
+        self._close: Optional[Callable[[], None]] = close
+
+    def close(self) -> None:
+        close, self._close = self._close, None
+        if close is not None:
+            close()
 
 
 class Publisher(Protocol):

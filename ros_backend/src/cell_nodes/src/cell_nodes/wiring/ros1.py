@@ -6,17 +6,7 @@ from typing import Any, Callable, List, Optional
 import rospy
 
 from .. import ros_publish
-from .api import ServiceError
-
-
-class _Closer:
-    def __init__(self, close: Callable[[], None]) -> None:
-        self._close: Optional[Callable[[], None]] = close
-
-    def close(self) -> None:
-        close, self._close = self._close, None
-        if close is not None:
-            close()
+from .api import Closer, ServiceError
 
 
 class _Publisher:
@@ -72,17 +62,17 @@ class Ros1Wiring:
         return _Publisher(rospy.Publisher(topic, msg_cls, latch=latch, queue_size=queue_size))
 
     def subscribe(self, topic: str, msg_cls: type, callback: Callable[[Any, str], None], queue_size: int = 10,
-                  latched: bool = False) -> _Closer:
+                  latched: bool = False) -> Closer:
         def on_message(msg: Any) -> None:
             header = getattr(msg, "_connection_header", None) or {}
             callback(msg, str(header.get("callerid", "")))
 
         sub = rospy.Subscriber(topic, msg_cls, on_message, queue_size=queue_size)
-        return _Closer(sub.unregister)
+        return Closer(sub.unregister)
 
-    def service(self, name: str, srv_cls: type, handler: Callable[[Any], Any]) -> _Closer:
+    def service(self, name: str, srv_cls: type, handler: Callable[[Any], Any]) -> Closer:
         svc = rospy.Service(name, srv_cls, handler)
-        return _Closer(lambda: svc.shutdown("closed"))
+        return Closer(lambda: svc.shutdown("closed"))
 
     def client(self, name: str, srv_cls: type) -> _Client:
         return _Client(name, srv_cls)
@@ -93,9 +83,9 @@ class Ros1Wiring:
     def response(self, srv_cls: type, **fields: Any) -> Any:
         return srv_cls._response_class(**fields)
 
-    def timer(self, period: float, callback: Callable[[], None]) -> _Closer:
+    def timer(self, period: float, callback: Callable[[], None]) -> Closer:
         timer = rospy.Timer(rospy.Duration.from_sec(period), lambda _event: callback())
-        return _Closer(timer.shutdown)
+        return Closer(timer.shutdown)
 
     def now(self) -> float:
         return rospy.get_time()

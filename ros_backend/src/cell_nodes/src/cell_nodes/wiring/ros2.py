@@ -17,22 +17,12 @@ from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from .api import ServiceError
+from .api import Closer, ServiceError
 
 
 def qos(depth: int, latch: bool) -> QoSProfile:
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=max(1, depth), reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL if latch else DurabilityPolicy.VOLATILE)
-
-
-class _Closer:
-    def __init__(self, close: Callable[[], None]) -> None:
-        self._close: Optional[Callable[[], None]] = close
-
-    def close(self) -> None:
-        close, self._close = self._close, None
-        if close is not None:
-            close()
 
 
 class _Publisher:
@@ -172,18 +162,18 @@ class Ros2Wiring:
         return name or ""
 
     def subscribe(self, topic: str, msg_cls: type, callback: Callable[[Any, str], None], queue_size: int = 10,
-                  latched: bool = False) -> _Closer:
+                  latched: bool = False) -> Closer:
         def on_message(msg: Any, info: Any) -> None:
             callback(msg, self._sender(topic, info))
 
         sub = self.node.create_subscription(msg_cls, topic, on_message, qos(queue_size, latched),
                                             callback_group=self.group)
-        return _Closer(lambda: self.node.destroy_subscription(sub))
+        return Closer(lambda: self.node.destroy_subscription(sub))
 
-    def service(self, name: str, srv_cls: type, handler: Callable[[Any], Any]) -> _Closer:
+    def service(self, name: str, srv_cls: type, handler: Callable[[Any], Any]) -> Closer:
         svc = self.node.create_service(srv_cls, name, lambda request, _response: handler(request),
                                        callback_group=self.group)
-        return _Closer(lambda: self.node.destroy_service(svc))
+        return Closer(lambda: self.node.destroy_service(svc))
 
     def client(self, name: str, srv_cls: type) -> _Client:
         return _Client(self, name, srv_cls)
@@ -194,9 +184,9 @@ class Ros2Wiring:
     def response(self, srv_cls: type, **fields: Any) -> Any:
         return srv_cls.Response(**fields)
 
-    def timer(self, period: float, callback: Callable[[], None]) -> _Closer:
+    def timer(self, period: float, callback: Callable[[], None]) -> Closer:
         timer = self.node.create_timer(period, callback, callback_group=self.group)
-        return _Closer(lambda: self.node.destroy_timer(timer))
+        return Closer(lambda: self.node.destroy_timer(timer))
 
     def now(self) -> float:
         return self.node.get_clock().now().nanoseconds / 1e9
