@@ -8,8 +8,10 @@ Latency = receipt time at the client minus the publish time carried in the messa
 Server RSS (max) and CPU (% of one core) are sampled from /proc during each scenario.
 
 Run: cd /work/main && source scripts/ros-env.sh && python bench/rosbridge_bench.py [--duration 5]
-BENCH_QUICK=1 (npm run bench -- --quick) makes the default 1.5 s per scenario.
-It starts its own roscore and rosbridge_server on free loopback ports and stops both at the end.
+(or with scripts/ros2-env.sh: the same server and scenarios on ROS 2 Jazzy; bench/run.sh runs both, one after the
+other). BENCH_QUICK=1 (npm run bench -- --quick) makes the default 1.5 s per scenario.
+It starts its own roscore (ROS 1; on ROS 2 a domain of its own) and rosbridge_server on free loopback ports and
+stops both at the end; the publisher is this process, through the nodes' wiring.
 """
 from __future__ import annotations
 
@@ -77,8 +79,8 @@ async def _client(port: int, sub: Dict[str, Any], kind: str, stop_at: float, sta
             if kind == "array":
                 sent = body["data"][0]
             else:
-                st = body["header"]["stamp"]
-                sent = st["secs"] + st["nsecs"] * 1e-9
+                st = body["header"]["stamp"]  # ROS 1 {secs, nsecs}; ROS 2 {sec, nanosec}
+                sent = st.get("secs", st.get("sec", 0)) + st.get("nsecs", st.get("nanosec", 0)) * 1e-9
             if sent >= start_at:  # ignore warm-up messages
                 lat.append((now - sent) * 1000.0)
                 counts[0] += 1
@@ -142,9 +144,8 @@ def make_jpeg() -> bytes:
         return os.urandom(30_000)
 
 
-def run_scenario(name: str, port: int, server_pid: int, n_clients: int, rate: float, kind: str,
+def run_scenario(ros: Any, name: str, port: int, server_pid: int, n_clients: int, rate: float, kind: str,
                  compression: str, duration: float, jpeg: bytes) -> Dict[str, Any]:
-    import rospy
     import std_msgs.msg as std
     import sensor_msgs.msg as sensor
 
@@ -154,13 +155,12 @@ def run_scenario(name: str, port: int, server_pid: int, n_clients: int, rate: fl
     warmup = 1.5
     start_at = time.time() + warmup
     stop_at = start_at + duration + 0.5
-    ctx = mp.get_context("spawn")  # not fork: this process already runs rospy threads
+    ctx = mp.get_context("spawn")  # not fork: this process already runs the ROS client library's threads
     parent, child = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=client_process, args=(port, n_clients, sub, kind, start_at, stop_at, child),
                       daemon=True)
     proc.start()
-    pub = rospy.Publisher(topic, std.Float64MultiArray if kind == "array" else sensor.CompressedImage,
-                          queue_size=100, tcp_nodelay=True)
+    pub = ros.publisher(topic, std.Float64MultiArray if kind == "array" else sensor.CompressedImage, queue_size=100)
     sampler = Sampler(server_pid)
     period = 1.0 / rate
     sent = 0
@@ -179,7 +179,7 @@ def run_scenario(name: str, port: int, server_pid: int, n_clients: int, rate: fl
             m = std.Float64MultiArray(data=[time.time(), 1.0, 2.0, 3.0, 4.0, 5.0])
         else:
             m = sensor.CompressedImage(format="jpeg", data=jpeg)
-            m.header.stamp = rospy.Time.from_sec(time.time())
+            m.header.stamp = ros.stamp(time.time())
         pub.publish(m)
         if now >= start_at:
             sent += 1
@@ -193,7 +193,7 @@ def run_scenario(name: str, port: int, server_pid: int, n_clients: int, rate: fl
     rss_max = max(rss_max, sampler.rss_mb())
     lats, counts = parent.recv()
     proc.join(10)
-    pub.unregister()
+    pub.close()
     all_lat = sorted(x for per in lats for x in per)
     q = statistics.quantiles(all_lat, n=100) if len(all_lat) >= 2 else [float("nan")] * 99
     return {
@@ -213,26 +213,35 @@ def main() -> int:
 
     master_port, port = free_port(), free_port()
     home = tempfile.mkdtemp(prefix="rosbridge-bench-")
-    os.environ.update(ROS_MASTER_URI=f"http://127.0.0.1:{master_port}", ROS_HOSTNAME="127.0.0.1",
-                      ROS_HOME=home, ROS_LOG_DIR=home)
-    core = subprocess.Popen(["roscore", "-p", str(master_port)], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True)
+    ros2 = os.environ.get("ROS_VERSION") == "2"
+    core: Optional[subprocess.Popen] = None
+    if ros2:  # no master: a domain of its own, discovery on loopback
+        os.environ.update(ROS_DOMAIN_ID=str(200 + os.getpid() % 30), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+                          ROS_HOME=home, ROS_LOG_DIR=home)
+        server_args = ["--ros-args", "-r", "__node:=rosbridge_bench_server", "-p", f"port:={port}"]
+    else:
+        os.environ.update(ROS_MASTER_URI=f"http://127.0.0.1:{master_port}", ROS_HOSTNAME="127.0.0.1",
+                          ROS_HOME=home, ROS_LOG_DIR=home)
+        core = subprocess.Popen(["roscore", "-p", str(master_port)], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL, start_new_session=True)
+        server_args = [f"_port:={port}", "__name:=rosbridge_bench_server"]
     server: Optional[subprocess.Popen] = None
     try:
-        import rosgraph
-        deadline = time.monotonic() + 20
-        while not rosgraph.is_master_online(os.environ["ROS_MASTER_URI"]):
-            if time.monotonic() > deadline:
-                raise RuntimeError("roscore did not start")
-            time.sleep(0.1)
-        server = subprocess.Popen([sys.executable, SERVER, f"_port:={port}", "__name:=rosbridge_bench_server"],
+        if core is not None:
+            import rosgraph
+            deadline = time.monotonic() + 20
+            while not rosgraph.is_master_online(os.environ["ROS_MASTER_URI"]):
+                if time.monotonic() > deadline:
+                    raise RuntimeError("roscore did not start")
+                time.sleep(0.1)
+        server = subprocess.Popen([sys.executable, SERVER, *server_args],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         wait_port(port, 20)
-        import rospy
-        rospy.init_node("rosbridge_bench", anonymous=True, disable_signals=True)
+        from cell_nodes import wiring
+        ros = wiring.connect("rosbridge_bench", anonymous=True, disable_signals=True)
         jpeg = make_jpeg()
-        print(f"rosbridge bench: loopback, {os.cpu_count()} cores, {args.duration:g} s per scenario{' (quick)' if quick else ''}, "
-              f"JPEG {len(jpeg) / 1024:.0f} KB", flush=True)
+        print(f"rosbridge bench (ROS {2 if ros2 else 1}): loopback, {os.cpu_count()} cores, {args.duration:g} s per "
+              f"scenario{' (quick)' if quick else ''}, JPEG {len(jpeg) / 1024:.0f} KB", flush=True)
         scenarios = [
             ("array100Hz-json", 1, 100.0, "array", "none"),
             ("array100Hz-json", 10, 100.0, "array", "none"),
@@ -244,7 +253,7 @@ def main() -> int:
         ]
         rows = []
         for name, n, rate, kind, comp in scenarios:
-            rows.append(run_scenario(name, port, server.pid, n, rate, kind, comp, args.duration, jpeg))
+            rows.append(run_scenario(ros, name, port, server.pid, n, rate, kind, comp, args.duration, jpeg))
             r = rows[-1]
             print(f"  done {name} x{n}: p95 {r['p95']:.2f} ms", flush=True)
         print()
@@ -263,11 +272,12 @@ def main() -> int:
                 server.wait(10)
             except subprocess.TimeoutExpired:
                 server.kill()
-        core.send_signal(signal.SIGTERM)
-        try:
-            core.wait(10)
-        except subprocess.TimeoutExpired:
-            os.killpg(core.pid, signal.SIGKILL)
+        if core is not None:
+            core.send_signal(signal.SIGTERM)
+            try:
+                core.wait(10)
+            except subprocess.TimeoutExpired:
+                os.killpg(core.pid, signal.SIGKILL)
 
 
 if __name__ == "__main__":

@@ -76,7 +76,7 @@ source scripts/ros-env.sh
 
 run_one() {
   case "$1" in
-    rosbridge) python bench/rosbridge_bench.py ;;
+    rosbridge) python bench/rosbridge_bench.py && (source scripts/ros2-env.sh && python bench/rosbridge_bench.py) ;;
     relay) node bench/bff_relay_bench.mjs ;;
     sim) python bench/sim_bench.py ;;
     manual) node bench/manual_bench.mjs ;;

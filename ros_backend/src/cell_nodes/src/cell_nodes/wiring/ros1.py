@@ -59,7 +59,7 @@ class Ros1Wiring:
         return rospy.get_param("~" + name, default)
 
     def publisher(self, topic: str, msg_cls: type, latch: bool = False, queue_size: int = 10) -> _Publisher:
-        return _Publisher(rospy.Publisher(topic, msg_cls, latch=latch, queue_size=queue_size))
+        return _Publisher(rospy.Publisher(topic, msg_cls, latch=latch, queue_size=queue_size, tcp_nodelay=True))
 
     def subscribe(self, topic: str, msg_cls: type, callback: Callable[[Any, str], None], queue_size: int = 10,
                   latched: bool = False) -> Closer:

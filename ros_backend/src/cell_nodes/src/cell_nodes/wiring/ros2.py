@@ -1,11 +1,16 @@
-"""The nodes' wiring on ROS 2 (rclpy): one node, spun by a multi-threaded executor (callbacks may block, as rospy's
-own threads let them), node parameters, transient local for what ROS 1 latched.
+"""The nodes' wiring on ROS 2 (rclpy): one node, node parameters, transient local for what ROS 1 latched.
+
+Threads as rospy has them: a single-threaded executor only moves data (rclpy's MultiThreadedExecutor costs a core
+by itself: docs/rosbridge.md); each subscription's callbacks run on a thread of its own, in order, from a queue of
+its queue_size (the oldest dropped, as rospy does), each service request on a thread of its own, each timer on a
+thread of its own. So a callback may block (call a service, wait for a move) without stalling the node.
 
 Signals: SIGINT and SIGTERM shut the node down (ok() turns False, spin and sleep return), as a rospy node ends on
 both; rclpy's own handler is not installed (it would raise KeyboardInterrupt in whatever the main thread does).
 """
 from __future__ import annotations
 
+import collections
 import signal
 import threading
 import time
@@ -13,7 +18,8 @@ from typing import Any, Callable, Dict, List, Optional
 
 import rclpy
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.task import Future
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -103,11 +109,46 @@ class _Client:
         self._wiring.node.destroy_client(self.client)
 
 
+class _Lane:
+    """A thread that runs `run(item)` for each item put, in order; at most `size` waiting (the oldest dropped)."""
+
+    def __init__(self, name: str, size: int, run: Callable[[Any], None]) -> None:
+        self._items: collections.deque = collections.deque(maxlen=max(1, size))
+        self._ready = threading.Condition()
+        self._closed = False
+        self._run = run
+        threading.Thread(target=self._loop, name=name, daemon=True).start()
+
+    def put(self, item: Any) -> None:
+        with self._ready:
+            self._items.append(item)
+            self._ready.notify()
+
+    def close(self) -> None:
+        with self._ready:
+            self._closed = True
+            self._ready.notify()
+
+    def _loop(self) -> None:
+        while True:
+            with self._ready:
+                while not self._items and not self._closed:
+                    self._ready.wait()
+                if self._closed:
+                    return
+                item = self._items.popleft()
+            try:
+                self._run(item)
+            except Exception:  # as rospy: the callback's error is logged, the node goes on
+                import traceback
+                traceback.print_exc()
+
+
 class Ros2Wiring:
     ros_version = 2
 
     def __init__(self, name: str, argv: Optional[List[str]] = None, anonymous: bool = False,
-                 disable_signals: bool = False, threads: int = 4) -> None:
+                 disable_signals: bool = False) -> None:
         if not rclpy.ok():
             rclpy.init(args=argv, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
         if anonymous:
@@ -117,7 +158,7 @@ class Ros2Wiring:
         ns = self.node.get_namespace().rstrip("/")
         self.name = f"{ns}/{self.node.get_name()}"
         self.group = ReentrantCallbackGroup()
-        self._executor = MultiThreadedExecutor(num_threads=threads)
+        self._executor = SingleThreadedExecutor()
         self._executor.add_node(self.node)
         self._spinner: Optional[threading.Thread] = None
         self._senders: Dict[bytes, str] = {}
@@ -166,13 +207,32 @@ class Ros2Wiring:
         def on_message(msg: Any, info: Any) -> None:
             callback(msg, self._sender(topic, info))
 
-        sub = self.node.create_subscription(msg_cls, topic, on_message, qos(queue_size, latched),
-                                            callback_group=self.group)
-        return Closer(lambda: self.node.destroy_subscription(sub))
+        lane = _Lane(f"sub {topic}", queue_size, lambda item: callback(item[0], self._sender(topic, item[1])))
+        sub = self.node.create_subscription(msg_cls, topic, lambda msg, info: lane.put((msg, info)),
+                                            qos(queue_size, latched), callback_group=self.group)
+
+        def close() -> None:
+            self.node.destroy_subscription(sub)
+            lane.close()
+        return Closer(close)
 
     def service(self, name: str, srv_cls: type, handler: Callable[[Any], Any]) -> Closer:
-        svc = self.node.create_service(srv_cls, name, lambda request, _response: handler(request),
-                                       callback_group=self.group)
+        executor = self._executor
+
+        def answer(request: Any, done: Future) -> None:
+            try:
+                done.set_result(handler(request))
+            except Exception as exc:  # the caller gets a default response (ROS 2 has no error reply)
+                self.error("service %s failed: %s", name, exc)
+                done.set_result(srv_cls.Response())
+
+        async def on_request(request: Any, _response: Any) -> Any:
+            done = Future(executor=executor)
+            done.add_done_callback(lambda _f: None)  # set_result then wakes the executor (a task is scheduled)
+            threading.Thread(target=answer, args=(request, done), name=f"serve {name}", daemon=True).start()
+            return await done
+
+        svc = self.node.create_service(srv_cls, name, on_request, callback_group=self.group)
         return Closer(lambda: self.node.destroy_service(svc))
 
     def client(self, name: str, srv_cls: type) -> _Client:
@@ -185,8 +245,13 @@ class Ros2Wiring:
         return srv_cls.Response(**fields)
 
     def timer(self, period: float, callback: Callable[[], None]) -> Closer:
-        timer = self.node.create_timer(period, callback, callback_group=self.group)
-        return Closer(lambda: self.node.destroy_timer(timer))
+        lane = _Lane(f"timer {period:g} s", 1, lambda _item: callback())
+        timer = self.node.create_timer(period, lambda: lane.put(None), callback_group=self.group)
+
+        def close() -> None:
+            self.node.destroy_timer(timer)
+            lane.close()
+        return Closer(close)
 
     def now(self) -> float:
         return self.node.get_clock().now().nanoseconds / 1e9
@@ -241,6 +306,8 @@ class Ros2Wiring:
             return
         self._stopping.set()
         self._executor.shutdown(timeout_sec=1.0)
+        if self._spinner is not None and self._spinner is not threading.current_thread():
+            self._spinner.join(5)  # out of rclpy before the node goes (else a C++ abort at exit)
         if not self._closed:
             self._closed = True
             # The node's endpoints leave the graph now (peers hear it at once), not when DDS's lease runs out.
