@@ -653,8 +653,8 @@ def test_a_late_heartbeat_neither_restarts_nor_keeps_a_jog_alive(robot: FakeRobo
 
 def test_a_jog_stopped_while_its_button_is_held_stays_stopped_until_a_new_press(robot: FakeRobot) -> None:
     """"Stop robot" from another session while the holder's thumb stayed down: the holder's next heartbeat started
-    the arm again (e2e, before the fix). A stop holds the press; the heartbeat timeout does not (a live link that
-    stalled for a moment jogs on; late heartbeats are dropped by their stamp)."""
+    the arm again (e2e, before the fix). A stop holds the press, and so does the heartbeat timeout: heartbeats that
+    come again after a stall never restart the arm by themselves (issue 51: as a teach pendant's enabling switch)."""
     clock = FakeClock()
     d = make_driver(robot, clock=clock)
     assert d.connect()
@@ -670,18 +670,22 @@ def test_a_jog_stopped_while_its_button_is_held_stays_stopped_until_a_new_press(
     clock.t += 0.25  # a stall: the watchdog stops the arm...
     assert d.check_heartbeat()
     d.poll()
-    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=8)  # ...and the same press jogs on once heartbeats are back
-    assert len(robot.moves("speedJ")) == 3
-    clock.t += 0.25  # e2e: a stall stopped the jog just before Stop robot came; the press must still be held
-    assert d.check_heartbeat()
-    d.poll()
+    for _ in range(4):  # ...and the same press's heartbeats, back after the stall, move nothing
+        clock.t += 0.05
+        d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=8)
+        assert not d.check_heartbeat()
+    assert len(robot.moves("speedJ")) == 2 and d.state().motion == "idle"
+    assert d.state().message == "jog stopped: no heartbeat for 0.2 s"  # the page still says why
+    d.jog("arm", "joint", 0, 0, 0.5, "base", 0.01, press=8)  # let go...
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=9)  # ...and press again: it moves
+    assert len(robot.moves("speedJ")) == 3 and d.state().motion == "jogging"
     assert d.stop()[0]
     d.poll()
-    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=8)
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=9)
     assert len(robot.moves("speedJ")) == 3 and d.state().motion == "idle"
-    d.jog("arm", "joint", 0, -1, 0.5, "base", 0.01, press=8)  # a different jog is a new command
+    d.jog("arm", "joint", 0, -1, 0.5, "base", 0.01, press=9)  # a different jog is a new command
     assert len(robot.moves("speedJ")) == 4
-    # A publisher without press numbers (0): after a stop, only a release lets it move again.
+    # A publisher without press numbers (0): after a stop or a stall, only a release lets it move again.
     d.jog("arm", "joint", 0, 1, 0.5, "base")
     assert len(robot.moves("speedJ")) == 5
     assert d.stop()[0]
@@ -691,6 +695,11 @@ def test_a_jog_stopped_while_its_button_is_held_stays_stopped_until_a_new_press(
     d.jog("arm", "joint", 0, 0, 0.5, "base")
     d.jog("arm", "joint", 0, 1, 0.5, "base")
     assert len(robot.moves("speedJ")) == 6
+    clock.t += 0.25
+    assert d.check_heartbeat()
+    d.poll()
+    d.jog("arm", "joint", 0, 1, 0.5, "base")
+    assert len(robot.moves("speedJ")) == 6 and d.state().motion == "idle"
 
 
 def test_why_a_held_button_does_not_move_the_arm_is_logged_once_per_press(robot: FakeRobot, caplog: Any) -> None:

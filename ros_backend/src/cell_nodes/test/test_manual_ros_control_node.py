@@ -250,6 +250,21 @@ def test_a_joint_jog_its_release_and_the_watchdog(stack: Stack) -> None:
         stack.state.wait(lambda m: m.motion == "idle" and m.message == "jog stopped: no heartbeat for 0.2 s", 1,
                          "the watchdog's stop", since=last)
         assert stack.fresh_q()[6] - q1 < -0.1
+        # Its heartbeats come again (a frozen page thawed, the button still held): nothing moves until a new press.
+        q2 = stack.fresh_q()[6]
+        end = time.monotonic() + 0.5
+        while time.monotonic() < end:
+            jog.publish(msg)
+            time.sleep(0.05)
+        assert stack.joints.settled_at(end - 0.5, still) is not None and abs(stack.fresh_q()[6] - q2) < 0.002, \
+            "the stalled press moved the arm again"
+        assert stack.state.msg.motion == "idle"
+        jog.publish(release)
+        start = time.monotonic()
+        while time.monotonic() < start + 0.4:  # a new press (released, then pressed again) moves it
+            jog.publish(msg)
+            time.sleep(0.05)
+        assert stack.fresh_q()[6] - q2 < -0.05
     finally:
         jog.publish(release)  # no jog left running for the next test, whatever failed
         jog.unregister()

@@ -209,7 +209,7 @@ def _time_to_standstill(watch, since: float, limit: float = 2.0) -> float:
 def test_jog_stops_within_300_ms_when_heartbeats_stop(cell) -> None:
     driver, watch = cell
     go_home(driver)
-    jog = ("arm", "joint", 5, 1, 1.0, "base")  # wrist 3 at the full slider: 1 rad/s
+    jog = ("arm", "joint", 5, 1, 1.0, "base", None, 1)  # wrist 3 at the full slider: 1 rad/s; the page's press 1
     last = _jog_then(driver, watch, 1.0, jog)
     moving = speed_of(watch)
     assert moving > 0.9, f"the jog should run at ~1 rad/s, ran at {moving:.2f}"
@@ -219,8 +219,17 @@ def test_jog_stops_within_300_ms_when_heartbeats_stop(cell) -> None:
     assert stopped_after < 0.3, "standstill later than 300 ms after the last heartbeat"
     assert driver.state().message == "jog stopped: no heartbeat for 0.2 s"
     wait_for(lambda: driver.state().motion == "idle", 1, what="idle")
-    # Release (direction 0): standstill within 300 ms.
-    _jog_then(driver, watch, 0.6, ("arm", "joint", 5, -1, 1.0, "base"))
+    # The same press's heartbeats come again (a page that froze and thawed with the button still held): the arm
+    # stays where it stopped, as with a teach pendant's enabling switch; only a new press moves it.
+    q = watch.getActualQ()[5]
+    speeds: list[float] = []
+    _jog_then(driver, watch, 0.5, jog, lambda: speeds.append(speed_of(watch)))
+    assert max(speeds) < 0.01 and abs(watch.getActualQ()[5] - q) < 0.001, "the stalled press moved the arm again"
+    assert driver.state().motion == "idle"
+    driver.jog("arm", "joint", 5, 0, 1.0, "base", None, 1)
+    # Release (direction 0) of a new press: standstill within 300 ms.
+    _jog_then(driver, watch, 0.6, ("arm", "joint", 5, -1, 1.0, "base", None, 2))
+    assert speed_of(watch) > 0.9, "a new press did not move the arm"
     t_release = time.monotonic()
     driver.jog("arm", "joint", 5, 0, 1.0, "base")
     released_after = _time_to_standstill(watch, t_release)

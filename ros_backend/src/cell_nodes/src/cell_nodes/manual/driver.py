@@ -1107,5 +1107,5 @@ class ManualDriver:
             if not self._jog.expired():
                 return False
             self._stop_jog(say("manual.jog_no_heartbeat", "jog stopped: no heartbeat for {seconds} s",
-                               seconds=f"{self.limits.jog_timeout:g}"), hard=True, hold=False)
+                               seconds=f"{self.limits.jog_timeout:g}"), hard=True)
         return True

@@ -9,8 +9,9 @@ The page publishes the held jog every 50 ms and direction 0 on release. Rules (D
   the controller (lost, or stopping the arm itself) stays stopped while its heartbeats go on: only a new press (its
   `press` number changes), a different jog, or the release and a new press move the arm again. Why: "Stop robot"
   from another session did not hold while the holder's thumb stayed down (the next heartbeat restarted the arm).
-  The heartbeat timeout does not hold the press: on a live link that stalled for a moment the jog goes on once
-  heartbeats come again (the driver drops late ones by their stamp); holding it there failed the loaded e2e host.
+  The heartbeat timeout holds the press too, as a teach pendant's enabling switch does: heartbeats that come again
+  after a stall (a frozen page, a stalled BFF or rosbridge) never restart the arm by themselves; the operator lets
+  go and presses again.
 - a press that was released never moves the arm again: a heartbeat of it that arrives after its release (delayed on
   the way) is held (press numbers are never reused; press 0, a publisher without them, is not remembered).
 The clock is injected so the timeout is tested without sleeping. Not thread-safe: the driver holds its lock.
@@ -101,7 +102,7 @@ class JogSupervisor:
     def clear(self, hold: bool = True, released: bool = False) -> Optional[Jog]:
         """Forget the running jog (the caller stops the arm); returns it, or None if none ran. hold: its press's
         further heartbeats are held (see the module's rules), also when the heartbeat timeout had already stopped it;
-        hold=False (the heartbeat timeout, a start the controller refused) holds nothing; released: the press ended."""
+        hold=False (a start the controller refused: it never moved) holds nothing; released: the press ended."""
         jog, self.active = self.active, None
         if released:
             self.stopped = self.pressed = None
