@@ -55,8 +55,8 @@ def _render_main(conn, seed: int, urdf_dir: str, size: tuple[int, int], world_sp
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group: the parent stops us
     # Budget the renderer: a lower priority lets the controller loop win whenever both want the CPU
     # (Mesa's llvmpipe may use every core; LP_NUM_THREADS=1 confines it further at a cost in frame rate).
-    try:
-        os.nice(RENDER_NICE)
+    try:  # absolute: the sim's own (raised) priority is inherited
+        os.setpriority(os.PRIO_PROCESS, 0, RENDER_NICE)
     except OSError:
         pass
     import numpy as np

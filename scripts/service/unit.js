@@ -121,6 +121,13 @@ TimeoutStopSec=15
 StandardOutput=journal
 StandardError=journal
 SyslogIdentifier=${name}
+# Who gets the CPU first (docs/service.md, "Priorities"): the motion path (the arm drivers, the simulated
+# controllers) raises itself to nice -10, which LimitNICE allows the service user; deferrable work (video, the
+# recorder, graph and log queries, the sim's renderer) lowers itself to nice 10. The cell as a whole weighs ten
+# times a default service for CPU and I/O (a kiosk browser, an update), so the robot never pays for a screen.
+LimitNICE=-10
+CPUWeight=1000
+IOWeight=1000
 
 [Install]
 WantedBy=multi-user.target

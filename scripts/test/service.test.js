@@ -49,7 +49,7 @@ const DIRECTIVES = {
   Unit: ['Description', 'Documentation', 'After', 'Wants'],
   Service: ['Type', 'User', 'WorkingDirectory', 'EnvironmentFile', 'ExecStart', 'Restart', 'RestartSec',
     'RestartPreventExitStatus', 'KillSignal', 'KillMode', 'TimeoutStopSec', 'StandardOutput', 'StandardError',
-    'SyslogIdentifier'],
+    'SyslogIdentifier', 'LimitNICE', 'CPUWeight', 'IOWeight'],
   Install: ['WantedBy'],
 };
 
@@ -108,6 +108,9 @@ test('the unit has every directive, absolute paths, and the env file', () => {
   assert.equal(kv.StandardOutput, 'journal');
   assert.equal(kv.StandardError, 'journal');
   assert.equal(kv.SyslogIdentifier, 'robot-cell');
+  assert.equal(kv.LimitNICE, '-10'); // cell_nodes/priority.py raises the motion path to exactly this
+  assert.equal(kv.CPUWeight, '1000');
+  assert.equal(kv.IOWeight, '1000');
   assert.equal(kv.WantedBy, 'multi-user.target');
   assert.match(u, /^\[Install\]\nWantedBy=multi-user.target\n$/m);
   assert.equal(parseKeyValues(unitFile({ ...OPTS, name: 'cell-b', envFile: '/etc/cell-b.env' })).SyslogIdentifier, 'cell-b');

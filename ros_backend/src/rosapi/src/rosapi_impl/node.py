@@ -7,11 +7,13 @@ import roslib.message
 import rospy
 
 from rosapi import srv
+from cell_nodes import priority
 from . import graph
 
 
 def main(argv: Any = None) -> None:
     rospy.init_node("rosapi", argv=argv)
+    rospy.loginfo(priority.claim(priority.DEFERRABLE, "rosapi (graph queries)"))
     ns = "/rosapi/"
 
     def serve(name: str, srv_cls: type, fn: Callable[[Any], Any]) -> None:

@@ -18,6 +18,7 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter, parameter_value_to_python
 
+from cell_nodes import priority
 from cell_rosbridge import types_ros2
 from rosapi_msgs import srv
 from rosapi_msgs.msg import TypeDef
@@ -180,6 +181,7 @@ class Params:
 def main(argv: Any = None) -> None:
     rclpy.init(args=argv)
     node = Node("rosapi")
+    node.get_logger().info(priority.claim(priority.DEFERRABLE, "rosapi (graph queries)"))
     group = ReentrantCallbackGroup()
     graph = Graph(node)
     params = Params(node, group)
