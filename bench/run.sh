@@ -9,7 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-read -r -a NAMES <<< 'rosbridge relay sim manual manual-iiwa sensors scene login backpressure video image-relay recorder logstorm soak'
+read -r -a NAMES <<< 'rosbridge relay sim manual manual-iiwa sensors scene login backpressure video image-relay recorder logstorm e2e-load soak'
 declare -A WHAT=(
   [rosbridge]='rosbridge server (direct)'
   [relay]='BFF relay path'
@@ -24,15 +24,16 @@ declare -A WHAT=(
   [image-relay]='relay CPU per image frame: a 30 Hz x 30 KB JPEG to 5 viewers, rosbridge_suite direct vs ours direct vs the BFF path (reference: bench/reference/rosbridge_suite.sh setup)'
   [recorder]='flight recorder: CPU and RSS of the recorder node with the demo cell running its process, a save'
   [logstorm]='ROS log storm (1 kHz for 60 s) with the Inspect page open on a tablet: RSS of the BFF, inspect node, rosout, rosbridge; page fps and a filter click'
+  [e2e-load]='every e2e spec that moves an arm, 3 times, on the three cells, beside a CPU hog on every core (stress-ng)'
   [soak]='25 clients through the BFF beside the simulated cell (camera viewer, jog session, running process) for minutes: RSS of every process, log errors, liveness'
 )
 declare -A FULL=(
   [rosbridge]='7 scenarios x 5 s' [relay]='3 x 5 s' [sim]='15 s' [manual]='5 runs each' [manual-iiwa]='5 runs each'
-  [sensors]='3 x 10 s' [scene]='4 x 8 s' [login]='5 runs per language' [backpressure]='slow 60 s, rtt 30 s, stall 300 s, fast 4 x 20 s' [video]='2 x 20 s' [image-relay]='3 rounds x 3 x 15 s' [recorder]='150 s' [logstorm]='60 s' [soak]='10 x 1 min (by name only)'
+  [sensors]='3 x 10 s' [scene]='4 x 8 s' [login]='5 runs per language' [backpressure]='slow 60 s, rtt 30 s, stall 300 s, fast 4 x 20 s' [video]='2 x 20 s' [image-relay]='3 rounds x 3 x 15 s' [recorder]='150 s' [logstorm]='60 s' [e2e-load]='3 repeats (by name only)' [soak]='10 x 1 min (by name only)'
 )
 declare -A QUICK=(
   [rosbridge]='7 x 1.5 s' [relay]='3 x 1.5 s' [sim]='4 s' [manual]='3 runs each' [manual-iiwa]='3 runs each'
-  [sensors]='3 x 3 s' [scene]='4 x 3 s' [login]='2 runs per language' [backpressure]='slow 10 s, rtt 10 s, stall 10 s, fast 2 x 2 s' [video]='2 x 5 s' [image-relay]='3 x 5 s' [recorder]='25 s' [logstorm]='15 s' [soak]='3 "minutes" of 8 s'
+  [sensors]='3 x 3 s' [scene]='4 x 3 s' [login]='2 runs per language' [backpressure]='slow 10 s, rtt 10 s, stall 10 s, fast 2 x 2 s' [video]='2 x 5 s' [image-relay]='3 x 5 s' [recorder]='25 s' [logstorm]='15 s' [e2e-load]='1 repeat' [soak]='3 "minutes" of 8 s'
 )
 
 usage() {
@@ -68,7 +69,7 @@ for a in "$@"; do
       fi ;;
   esac
 done
-if ((${#selected[@]} == 0)); then selected=("${NAMES[@]:0:${#NAMES[@]}-1}"); fi  # all but the soak
+if ((${#selected[@]} == 0)); then selected=("${NAMES[@]:0:${#NAMES[@]}-2}"); fi  # all but e2e-load and the soak
 if ((quick)); then export BENCH_QUICK=1; else unset BENCH_QUICK; fi  # the full run is never shortened
 
 bash scripts/bootstrap.sh
@@ -89,6 +90,7 @@ run_one() {
     image-relay) node bench/image_relay_bench.mjs ;;
     recorder) python bench/recorder_bench.py ;;
     logstorm) node bench/logstorm_bench.mjs ;;
+    e2e-load) bash bench/e2e_load.sh ;;
     soak) node bench/soak_bench.mjs ${soak_args[@]+"${soak_args[@]}"} ;;
   esac
 }

@@ -1,5 +1,6 @@
 // Playwright against the whole stack (roscore, rosbridge, ROS nodes, BFF, built PWA) on isolated ports,
 // in Debian's Chromium with phone, tablet and desktop profiles.
+import fs from 'node:fs';
 import { defineConfig, devices } from '@playwright/test';
 
 const chromium = {
@@ -11,9 +12,23 @@ const chromium = {
   },
 };
 
+// Profile coverage by what differs between profiles. The layout, touch and accessibility specs run on the phone, the
+// tablet and the desktop. Every other spec is a behaviour (the same code behind any screen). It runs once, on the
+// profile of the user it is for: the operator's work on the phone, the engineer's and the admin's tools on the desktop.
+export const EVERY_PROFILE = ['layout', 'a11y', 'a11y-alarm', 'a11y-glove', 'shell'];
+export const ON_THE_PHONE = ['manual', 'manual-lease', 'process', 'routines', 'alarms', 'recovery', 'video', 'sensors',
+  'scene', 'i18n', 'diagnostics'];
+export const ON_THE_DESKTOP = ['access', 'audit', 'database', 'inspect', 'inspect-graph', 'modules', 'parameters', 'plant',
+  'recorder', 'video-raw'];
+const specs = (/** @type {string[]} */ names) => names.map((n) => `**/${n}.spec.js`);
+// A spec on none of the lists would run nowhere without a word: refuse to start instead.
+const unlisted = fs.readdirSync(new URL('./tests', import.meta.url)).filter((f) => f.endsWith('.spec.js'))
+  .map((f) => f.slice(0, -'.spec.js'.length)).filter((n) => ![...EVERY_PROFILE, ...ON_THE_PHONE, ...ON_THE_DESKTOP].includes(n));
+if (unlisted.length) throw new Error(`e2e/playwright.config.js: put ${unlisted.join(', ')} on a profile's list`);
+
 export default defineConfig({
   testDir: './tests',
-  // Every spec on every profile; `run.sh` runs the profiles in two lanes, each lane with its own stack and directory.
+  // `run.sh` runs the profiles in two lanes, each lane with its own stack and directory.
   outputDir: process.env.E2E_OUTPUT_DIR || 'test-results',
   // The tests share one stack whose ROS state (mode, rosbridge process) they change: one at a time.
   workers: 1,
@@ -36,8 +51,8 @@ export default defineConfig({
     screenshot: 'only-on-failure',
   },
   projects: [
-    { name: 'phone', use: { ...devices['Pixel 7'], ...chromium } },
-    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium } },
-    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium } },
+    { name: 'phone', use: { ...devices['Pixel 7'], ...chromium }, testMatch: specs([...EVERY_PROFILE, ...ON_THE_PHONE]) },
+    { name: 'tablet', use: { ...devices['iPad Mini'], ...chromium }, testMatch: specs(EVERY_PROFILE) },
+    { name: 'desktop', use: { ...devices['Desktop Chrome'], ...chromium }, testMatch: specs([...EVERY_PROFILE, ...ON_THE_DESKTOP]) },
   ],
 });

@@ -1,7 +1,6 @@
 // The third cell (config/iiwa-cell.yaml: a KUKA LBR iiwa driven through the standard ROS interfaces of its own
-// driver, ros_control, simulated) through the same code: its own stack on its own ports, on the phone, tablet and
-// desktop profiles one after the other.
-// `npm test -w e2e` (run.sh) runs it in its second lane, after the demo cell's desktop run and the twin cell's.
+// driver, ros_control, simulated) through the same code: its own stack on its own ports, on the phone.
+// `npm test -w e2e` (run.sh) runs it in its first lane, after the demo cell's phone run, beside the second lane.
 import { defineConfig } from '@playwright/test';
 import base from './playwright.config.js';
 
@@ -12,5 +11,6 @@ export default defineConfig({
   ...base,
   testDir: './iiwa',
   use: { ...base.use, baseURL: `http://localhost:${process.env.E2E_PORT}` },
-  projects: base.projects,
+  // Each behaviour once (playwright.config.js): this cell's specs on the phone, every one of them.
+  projects: base.projects.filter((p) => p.name === 'phone').map(({ testMatch, ...p }) => p),
 });

@@ -1,6 +1,6 @@
 // The second cell (config/twin-arm-cell.yaml: two UR arms, a third role) through the same code: its own stack on
-// its own ports and controller addresses, on the phone, tablet and desktop profiles one after the other. `npm test -w e2e`
-// (run.sh) runs it in its second lane, after the demo cell's desktop run.
+// its own ports and controller addresses, on the tablet (an integrator commissioning a cell). `npm test -w e2e`
+// (run.sh) runs it in its second lane, after the demo cell's desktop and tablet run, beside the first lane.
 import { defineConfig } from '@playwright/test';
 import base from './playwright.config.js';
 
@@ -12,5 +12,6 @@ export default defineConfig({
   ...base,
   testDir: './twin',
   use: { ...base.use, baseURL: `http://localhost:${process.env.E2E_PORT}` },
-  projects: base.projects,
+  // Each behaviour once (playwright.config.js): this cell's specs on the tablet, every one of them.
+  projects: base.projects.filter((p) => p.name === 'tablet').map(({ testMatch, ...p }) => p),
 });

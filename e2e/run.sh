@@ -1,31 +1,32 @@
 #!/usr/bin/env bash
-# The whole e2e suite (`npm test -w e2e`): every spec of each cell on the phone, tablet and desktop profiles. The demo
-# cell runs in two lanes at once, each against a stack of its own (own ports, own controller address, own output
-# directory): the phone and the tablet (ports 18080-18086, UR controller at 127.0.0.9), and the desktop (18380-18386,
-# 127.0.0.19). Much of a spec's time is the cell's own real-time waits (a lease timeout, a stale diagnostic, a
-# recording's after-time), so two lanes on two cores take much less than one after the other. The twin-arm cell
-# (18180-) and the iiwa cell (18280-) then run alone: beside a demo lane, the host's load (about 20) once kept a twin
-# arm's controller from answering its driver within the driver's 1 s watchdog. A run goes on after a failing one, so
-# one run tells every failure; the exit status is non-zero if any failed. Lines are prefixed with their run.
+# The whole e2e suite (`npm test -w e2e`): the layout, touch and accessibility specs on the phone, the tablet and the
+# desktop, every behaviour once, on the profile of the user it is for (playwright.config.js). Two lanes run at once,
+# each against stacks of its own (own ports, own controller addresses, own output directory):
+#   lane A: the demo cell on the phone (18080-18086, UR controller at 127.0.0.9), then the iiwa cell (18280-);
+#   lane B: the demo cell on the desktop and the tablet (18380-18386, 127.0.0.19), then the twin-arm cell (18180-).
+# Much of a spec's time is the cell's own real-time waits (a lease timeout, a stale diagnostic, a recording's
+# after-time), so two lanes on two cores take much less than one after the other. The twin and iiwa cells run beside
+# the other lane again: the motion path (the drivers, the simulated controllers) claims the CPU first
+# (cell_nodes/priority.py), so a loaded host no longer starves a controller past its driver's watchdog. A run goes
+# on after a failing one, so one run tells every failure; the exit status is non-zero if any failed. Lines are
+# prefixed with their run.
 set -uo pipefail
 cd "$(dirname "$0")"
 
-# run <name> <env...> -- <playwright args...>: one Playwright run, its output prefixed, its status returned.
-run() {
-  local name=$1; shift
-  local -a env=()
-  while [ "$1" != "--" ]; do env+=("$1"); shift; done
-  shift
-  env "${env[@]}" E2E_OUTPUT_DIR="test-results/$name" npx playwright test "$@" 2>&1 | sed -u "s/^/[$name] /"
-  return "${PIPESTATUS[0]}"
-}
+source lib/lanes.sh  # run()
 
 lane_a() {
-  run demo-phone-tablet E2E_PORT=18080 E2E_UR_HOST=127.0.0.9 -- --project=phone --project=tablet
+  local rc=0
+  run demo-phone E2E_PORT=18080 E2E_UR_HOST=127.0.0.9 -- --project=phone || rc=1
+  run iiwa -- -c playwright.iiwa.config.js || rc=1
+  return $rc
 }
 
 lane_b() {
-  run demo-desktop E2E_PORT=18380 E2E_UR_HOST=127.0.0.19 -- --project=desktop
+  local rc=0
+  run demo-desktop-tablet E2E_PORT=18380 E2E_UR_HOST=127.0.0.19 -- --project=desktop --project=tablet || rc=1
+  run twin -- -c playwright.twin.config.js || rc=1
+  return $rc
 }
 
 t0=$(date +%s)
@@ -34,7 +35,5 @@ lane_b & b=$!
 rc=0
 wait $a || rc=1
 wait $b || rc=1
-run twin -- -c playwright.twin.config.js || rc=1
-run iiwa -- -c playwright.iiwa.config.js || rc=1
 echo "e2e: done in $(( $(date +%s) - t0 )) s ($([ $rc = 0 ] && echo 'all passed' || echo 'FAILED'))"
 exit $rc

@@ -1,6 +1,7 @@
-"""The alarms node with two motion groups: roscore + `rosrun cell_nodes alarms_node` with a cell file of two groups
-(left, right); this test stands in for the robot driver's per-group state topics (no sim, no operation-mode node:
-alarm_mode is off). Each group's alarms carry its name; one group silent raises only its own no_state."""
+"""The alarms node with two motion groups, on ROS 1 and ROS 2 (one body): `alarms_node` with a cell file of two groups
+(left, right); this test stands in for the robot driver's per-group state topics through the nodes' wiring (no sim,
+no operation-mode node: alarm_mode is off). Each group's alarms carry its name; one group silent raises only its own
+no_state."""
 from __future__ import annotations
 
 import tempfile
@@ -9,11 +10,10 @@ from pathlib import Path
 from typing import Iterator
 
 import pytest
-import rospy
 import yaml
 
 from conftest import wait_for
-from nodes_helpers import Nodes, client_node
+from nodes_helpers import Nodes, peer
 from test_alarms_node import Latest, active
 
 CELL = {
@@ -29,7 +29,7 @@ class Drivers:
 
     def __init__(self) -> None:
         from cell_msgs.msg import RobotState
-        self.pubs = {g: rospy.Publisher(f"/cell/manual/{g}/state", RobotState, queue_size=5) for g in ("left", "right")}
+        self.pubs = {g: peer().publisher(f"/cell/manual/{g}/state", RobotState, queue_size=5) for g in ("left", "right")}
         self.msgs = {g: RobotState(connected=True, controller=h, robot_mode="RUNNING", safety_mode="NORMAL",
                                    motion_group=g) for g, h in (("left", "127.0.2.1"), ("right", "127.0.2.2"))}
         self.silent: set[str] = set()
@@ -47,18 +47,17 @@ class Drivers:
         self._stop.set()
         self._thread.join(2)
         for p in self.pubs.values():
-            p.unregister()
+            p.close()
 
 
 @pytest.fixture(scope="module")
-def node(roscore: str) -> Iterator[Drivers]:
+def node(ros_graph: str) -> Iterator[Drivers]:
     path = Path(tempfile.mkdtemp(prefix="alarms-twin-")) / "cell.yaml"
     path.write_text(yaml.safe_dump(CELL))
     nodes = Nodes()
     nodes.run("alarms_twin", "alarms_node", f"_cell_config:={path}", "__name:=alarms_twin_test")
     drivers = None
     try:
-        client_node("alarms_twin_client")
         nodes.wait_ready("/cell/alarms/reset", what="the alarms node")
         drivers = Drivers()
         yield drivers
@@ -94,5 +93,5 @@ def test_each_group_has_its_own_robot_alarms(node: Drivers) -> None:
         wait_for(lambda: active(alarms).get("robot.left.no_state") is False and status.msg.controller_connected, 3,
                  what="left back")
     finally:
-        alarms.sub.unregister()
-        status.sub.unregister()
+        alarms.sub.close()
+        status.sub.close()

@@ -1460,3 +1460,27 @@ def test_two_real_drivers_move_their_own_robot(robot: FakeRobot) -> None:
     assert cell.state("left").motion == "jogging" and cell.state("right").motion == "idle"
     assert cell.stop() == (True, "stopped")
     assert robot.moves("speedStop") and cell.state("left").motion == "idle"
+
+
+def test_the_dead_man_time_counts_from_when_the_controller_took_the_jog(robot: FakeRobot) -> None:
+    """e2e beside another lane: starting a jog took longer than the jog timeout (a loaded host; the heartbeats that
+    came meanwhile waited behind it), and the watchdog stopped the arm 1 ms after it started, for good (the press is
+    held). The window starts once the controller took the jog."""
+    clock = FakeClock()
+    d = make_driver(robot, clock=clock)
+    assert d.connect()
+    start = d._start_jog
+
+    def slow_start(cmd: Any, g: Any) -> None:
+        clock.t += 0.3
+        start(cmd, g)
+    d._start_jog = slow_start  # type: ignore[method-assign]
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=3)
+    assert d.state().motion == "jogging"
+    assert not d.check_heartbeat(), "the watchdog counted the start's own time as missed heartbeats"
+    clock.t += 0.05
+    d.jog("arm", "joint", 0, 1, 0.5, "base", 0.01, press=3)
+    clock.t += 0.19
+    assert not d.check_heartbeat()
+    clock.t += 0.02  # the operator's heartbeats did stop: 0.21 s
+    assert d.check_heartbeat() and len(robot.moves("speedJ")) == 1

@@ -1020,6 +1020,7 @@ class ManualDriver:
                 return
             try:
                 self._start_jog(cmd, g)
+                self._jog.started()
                 log.info("jogging %s at %.0f %% (press %d)", cmd.label(), cmd.speed * 100, cmd.press)
                 self._noted = (0, "")  # a jog that runs again: why it stops being carried out is worth a line again
             except Refused as e:

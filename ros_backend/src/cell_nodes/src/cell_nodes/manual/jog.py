@@ -95,6 +95,12 @@ class JogSupervisor:
         self.active, self.pressed, self.stopped, self.last_beat = jog, jog, None, now
         return Decision.START
 
+    def started(self) -> None:
+        """The controller took the running jog: its dead-man time counts from now. Heartbeats that came while the
+        start was under way waited behind it (a slow controller or a loaded host); they must not count as missed."""
+        if self.active is not None:
+            self.last_beat = self.clock()
+
     def expired(self) -> bool:
         """True when the running jog missed its heartbeats for longer than the timeout."""
         return self.active is not None and self.clock() - self.last_beat > self.timeout
