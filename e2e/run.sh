@@ -13,19 +13,17 @@
 set -uo pipefail
 cd "$(dirname "$0")"
 
-source lib/lanes.sh  # run()
-
 lane_a() {
   local rc=0
-  run demo-phone E2E_PORT=18080 E2E_UR_HOST=127.0.0.9 -- --project=phone || rc=1
-  run iiwa -- -c playwright.iiwa.config.js || rc=1
+  bash lib/run-one.sh demo-phone E2E_PORT=18080 E2E_UR_HOST=127.0.0.9 -- --project=phone || rc=1
+  bash lib/run-one.sh iiwa -- -c playwright.iiwa.config.js || rc=1
   return $rc
 }
 
 lane_b() {
   local rc=0
-  run demo-desktop-tablet E2E_PORT=18380 E2E_UR_HOST=127.0.0.19 -- --project=desktop --project=tablet || rc=1
-  run twin -- -c playwright.twin.config.js || rc=1
+  bash lib/run-one.sh demo-desktop-tablet E2E_PORT=18380 E2E_UR_HOST=127.0.0.19 -- --project=desktop --project=tablet || rc=1
+  bash lib/run-one.sh twin -- -c playwright.twin.config.js || rc=1
   return $rc
 }
 
