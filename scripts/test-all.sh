@@ -26,7 +26,7 @@ step "ROS 2 Jazzy: our interfaces, and the rosbridge protocol on rclpy, same tes
     ros_backend/src/cell_rosbridge/test/test_generations.py ros_backend/src/cell_rosbridge/test/test_actions_ros2.py \
     ros_backend/src/cell_nodes/test/test_operation_mode.py ros_backend/src/cell_nodes/test/test_parameters_node.py \
     ros_backend/src/cell_nodes/test/test_monitor_nodes.py ros_backend/src/cell_nodes/test/test_alarms_node.py \
-    ros_backend/src/cell_nodes/test/test_alarms_twin_node.py \
+    ros_backend/src/cell_nodes/test/test_alarms_twin_node.py ros_backend/src/cell_nodes/test/test_video_node.py \
     ros_backend/ros2/test/test_discovery.py )
 
 step "stack supervisor (node:test)"

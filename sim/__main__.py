@@ -15,10 +15,9 @@ import sys
 import threading
 from typing import Any, Mapping, Optional
 
-from cell_nodes import priority
-
 from .cell import Cell, CellOptions
 from .cell_file import CellDevices, CellFileError, default_cell_path, devices_from, read_cell_file
+from .priority import claim_priority
 from .hosts import parse_host_list, resolve_hosts
 
 
@@ -132,7 +131,7 @@ def main(argv: Optional[list[str]] = None) -> int:
         from .ros_control.main import main as ros_control_main
         return ros_control_main(argv)
     opts = parse_args(argv)
-    logging.getLogger("sim").info(priority.claim(priority.MOTION, "sim (the arms' controllers)"))
+    logging.getLogger("sim").info(claim_priority("sim (the arms' controllers)"))
     # Many small periodic threads (500 Hz control loop, RTDE streams): hand the GIL over sooner than 5 ms.
     sys.setswitchinterval(0.0005)
     done = threading.Event()

@@ -9,9 +9,8 @@ import sys
 import threading
 from typing import Optional
 
-from cell_nodes import priority
-
 from ..cell_file import CellFileError, default_cell_path, devices_from, read_cell_file
+from ..priority import claim_priority
 from .cell import RosControlCell, RosControlOptions
 
 
@@ -52,7 +51,7 @@ def parse_args(argv: Optional[list[str]] = None) -> RosControlOptions:
 
 def main(argv: Optional[list[str]] = None) -> int:
     opts = parse_args(argv)
-    logging.getLogger("sim").info(priority.claim(priority.MOTION, "sim (the arm's ros_control driver)"))
+    logging.getLogger("sim").info(claim_priority("sim (the arm's ros_control driver)"))
     sys.setswitchinterval(0.0005)  # a 500 Hz loop among publisher threads: hand the GIL over sooner than 5 ms
     done = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):

@@ -74,13 +74,13 @@ class Pub:
     def __init__(self, topic):
         self.topic, self.connections, self.sent, self.gone = topic, 0, [], False
 
-    def get_num_connections(self):
+    def subscriber_count(self):
         return self.connections
 
     def publish(self, msg):
         self.sent.append(msg)
 
-    def unregister(self):
+    def close(self):
         self.gone = True
 
 
@@ -98,7 +98,7 @@ class Rig:
         def subscribe(topic, cb):
             entry = [topic, cb, False]
             self.subs.append(entry)
-            return SimpleNamespace(unregister=lambda: entry.__setitem__(2, True))
+            return SimpleNamespace(close=lambda: entry.__setitem__(2, True))
 
         def to_msg(src, data):
             self.encodes += 1

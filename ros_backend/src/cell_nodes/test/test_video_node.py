@@ -1,38 +1,38 @@
-"""The video node on a live roscore: `rosrun cell_nodes video_node` with a cell file of two raw streams, this test
-standing for the camera drivers (1280x720 rgb8, and one sending an encoding the node cannot show). A viewer's
-request names a JPEG topic whose frames have the width asked (an absurd width gets the camera's own); the node
-subscribes the camera only while that topic has a subscriber (the master's state says so); the bad camera is
-reported on /cell/video/status while the good one keeps being served."""
+"""The video node on a live ROS graph, one body for ROS 1 and ROS 2 (scripts/test-all.sh runs it under .venv-ros2
+too): `video_node` with a cell file of two raw streams, this test standing for the camera drivers (1280x720 rgb8, and
+one sending an encoding the node cannot show) through the nodes' wiring. A viewer's request names a JPEG topic whose
+frames have the width asked (an absurd width gets the camera's own); the node subscribes the camera only while that
+topic has a subscriber (the graph says so); the bad camera is reported on /cell/video/status while the good one keeps
+being served."""
 from __future__ import annotations
 
 import io
 import threading
+import time
 from pathlib import Path
-from typing import Iterator
+from typing import Any, Iterator
 
 import numpy as np
 import pytest
-import rosgraph
-import rospy
 import yaml
 from PIL import Image as PILImage
 
+from cell_nodes.ros_diagnostics import level_of
 from conftest import wait_for
-from nodes_helpers import Nodes, client_node
+from nodes_helpers import Nodes, peer
 
 ROOT = Path(__file__).resolve().parents[4]
 GOOD, BAD = "/video_test/arm/image_raw", "/video_test/odd/image_raw"
 
 
 @pytest.fixture(scope="module")
-def video(roscore: str, tmp_path_factory) -> Iterator[None]:
+def video(ros_graph: str, tmp_path_factory: Any) -> Iterator[None]:
     doc = yaml.safe_load((ROOT / "config" / "demo-cell.yaml").read_text())
     doc["video"] = {"streams": [{"name": "Arm", "topic": GOOD, "type": "raw"},
                                 {"name": "Odd", "topic": BAD, "type": "raw"},
                                 {"name": "Jpeg", "topic": "/video_test/jpeg/image/compressed"}]}
     path = tmp_path_factory.mktemp("video") / "cell.yaml"
     path.write_text(yaml.safe_dump(doc))
-    client_node("video_test_client")
     nodes = Nodes()
     node = nodes.run("video", "video_node", f"_cell_config:={path}", "__name:=video_test")
     cameras = Cameras()
@@ -51,7 +51,7 @@ class Cameras:
 
     def __init__(self) -> None:
         from sensor_msgs.msg import Image
-        self.pubs = {GOOD: rospy.Publisher(GOOD, Image, queue_size=1), BAD: rospy.Publisher(BAD, Image, queue_size=1)}
+        self.pubs = {GOOD: peer().publisher(GOOD, Image, queue_size=1), BAD: peer().publisher(BAD, Image, queue_size=1)}
         px = np.zeros((720, 1280, 3), np.uint8)
         px[:, :640] = (255, 0, 0)
         self.good = Image(width=1280, height=720, encoding="rgb8", step=1280 * 3, data=px.tobytes())
@@ -61,71 +61,66 @@ class Cameras:
         self._thread.start()
 
     def _run(self) -> None:
-        rate = rospy.Rate(20)
-        while not self._stop.is_set() and not rospy.is_shutdown():
-            self.good.header.stamp = self.bad.header.stamp = rospy.Time.now()
+        while not self._stop.wait(0.05):
+            self.good.header.stamp = self.bad.header.stamp = peer().stamp(time.time())
             self.pubs[GOOD].publish(self.good)
             self.pubs[BAD].publish(self.bad)
-            rate.sleep()
 
     def stop(self) -> None:
         self._stop.set()
         self._thread.join(2)
+        for pub in self.pubs.values():
+            pub.close()
 
 
-def request(topic: str, width: int, quality: int = 70):
+def request(topic: str, width: int, quality: int = 70) -> Any:
     from cell_msgs.srv import VideoRequest
-    return rospy.ServiceProxy("/cell/video/request", VideoRequest)(topic=topic, width=width, quality=quality)
-
-
-def subscribers(topic: str) -> list[str]:
-    _, subs, _ = rosgraph.Master("/video_test_check").getSystemState()
-    return next((nodes for name, nodes in subs if name == topic), [])
+    return peer().client("/cell/video/request", VideoRequest)(topic=topic, width=width, quality=quality)
 
 
 def frames(topic: str, n: int = 3) -> list[tuple[int, int]]:
     """The sizes of the next n JPEG frames on an output topic, read as a viewer would."""
     from sensor_msgs.msg import CompressedImage
     got: list[tuple[int, int]] = []
-    sub = rospy.Subscriber(topic, CompressedImage, lambda m: got.append(PILImage.open(io.BytesIO(m.data)).size),
-                           queue_size=1, buff_size=1 << 24)
+    sub = peer().subscribe(topic, CompressedImage,
+                           lambda m, _s: got.append(PILImage.open(io.BytesIO(bytes(m.data))).size), newest_only=True)
     try:
         wait_for(lambda: len(got) >= n, 20, what=f"{n} frames on {topic}")
     finally:
-        sub.unregister()
+        sub.close()
     return got[:n]
 
 
 def test_a_viewer_gets_frames_of_the_width_it_asked_and_the_camera_is_read_only_while_watched(video: None) -> None:
     r = request(GOOD, 390 * 3)
     assert r.ok and r.topic.startswith("/cell/video/") and r.quality == 70
-    assert subscribers(GOOD) == []                     # asked, not yet watched
+    assert peer().subscribers(GOOD) == []              # asked, not yet watched
     assert set(frames(r.topic)) == {(1280, 720)}       # 1170 px rounds up to 1280, the camera's own
     small = request(GOOD, 300)
     assert (small.width, small.height) == (320, 180)   # the camera's size is known now
     assert set(frames(small.topic)) == {(320, 180)}
-    assert "/video_test" in subscribers(GOOD)
-    wait_for(lambda: subscribers(GOOD) == [], 10, what="the node leaving the camera after its last viewer")
+    assert "/video_test" in peer().subscribers(GOOD)
+    wait_for(lambda: peer().subscribers(GOOD) == [], 10, what="the node leaving the camera after its last viewer")
     huge = request(GOOD, 100000)
     assert (huge.width, huge.height) == (1280, 720)
 
 
 def test_a_camera_sending_what_cannot_be_shown_is_reported_and_the_other_keeps_being_served(video: None) -> None:
     from diagnostic_msgs.msg import DiagnosticArray
+    from sensor_msgs.msg import CompressedImage
     bad = request(BAD, 320)
     good = request(GOOD, 640)
-    from sensor_msgs.msg import CompressedImage
-    holder = rospy.Subscriber(bad.topic, CompressedImage, lambda m: None)   # a viewer of the bad camera
+    holder = peer().subscribe(bad.topic, CompressedImage, lambda m, _s: None)   # a viewer of the bad camera
     try:
-        def bad_status():
-            m = rospy.wait_for_message("/cell/video/status", DiagnosticArray, timeout=5)
-            return next((s for s in m.status if s.hardware_id == BAD and s.level == 2), None)
+        def bad_status() -> Any:
+            m = peer().wait_for_message("/cell/video/status", DiagnosticArray, timeout=5)
+            return next((s for s in m.status if s.hardware_id == BAD and level_of(s) == 2), None) if m else None
         wait_for(bad_status, 15, what="the bad camera's error on /cell/video/status")
         assert "unsupported encoding yuv422" in bad_status().message
         assert "unsupported encoding yuv422" in request(BAD, 320).message
         assert set(frames(good.topic)) == {(640, 360)}
     finally:
-        holder.unregister()
+        holder.close()
 
 
 def test_a_topic_that_is_not_a_raw_stream_is_refused(video: None) -> None:

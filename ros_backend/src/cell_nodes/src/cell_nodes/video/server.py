@@ -24,13 +24,13 @@ class ConfigError(ValueError):
 
 
 class Publisher(Protocol):
-    def get_num_connections(self) -> int: ...
+    def subscriber_count(self) -> int: ...
     def publish(self, msg: Any) -> Any: ...
-    def unregister(self) -> Any: ...
+    def close(self) -> Any: ...
 
 
 class Subscription(Protocol):
-    def unregister(self) -> Any: ...
+    def close(self) -> Any: ...
 
 
 @dataclass(frozen=True)
@@ -123,7 +123,7 @@ class VideoServer:
         cam = self._cams[topic]
         now = self._clock()
         with self._lock:
-            watched = [o for o in cam.outputs.values() if o.pub.get_num_connections() > 0]
+            watched = [o for o in cam.outputs.values() if o.pub.subscriber_count() > 0]
         try:
             img = picture(msg.encoding, int(msg.width), int(msg.height), int(msg.step), msg.data,
                           bool(msg.is_bigendian))
@@ -150,12 +150,12 @@ class VideoServer:
             with self._lock:
                 watched = False
                 for key, out in list(cam.outputs.items()):
-                    if out.pub.get_num_connections() > 0:
+                    if out.pub.subscriber_count() > 0:
                         watched, out.idle_since = True, None
                     elif out.idle_since is None:
                         out.idle_since = now
                     elif now - out.idle_since > OUTPUT_IDLE_S:
-                        out.pub.unregister()
+                        out.pub.close()
                         del cam.outputs[key]
                 if watched:
                     cam.unwatched_since = None
@@ -166,7 +166,7 @@ class VideoServer:
                     if cam.unwatched_since is None:
                         cam.unwatched_since = now
                     elif now - cam.unwatched_since >= LINGER_S:
-                        cam.sub.unregister()
+                        cam.sub.close()
                         cam.sub, cam.unwatched_since = None, None
             statuses.append(self._status(cam, now))
         return statuses

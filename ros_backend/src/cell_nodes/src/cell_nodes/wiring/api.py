@@ -25,6 +25,9 @@ class Publisher(Protocol):
     def publish(self, msg: Any) -> bool:
         """Publish; False (and nothing raised) when the node is stopping."""
 
+    def subscriber_count(self) -> int:
+        """How many subscriptions this publisher has now (nobody watching: work can be skipped)."""
+
     def close(self) -> None: ...
 
 
@@ -55,11 +58,16 @@ class Wiring(Protocol):
         """latch: a late subscriber gets the last message (ROS 1 latching; ROS 2 transient local)."""
 
     def subscribe(self, topic: str, msg_cls: type, callback: Callable[[Any, str], None], queue_size: int = 10,
-                  latched: bool = False) -> Handle:
+                  latched: bool = False, newest_only: bool = False) -> Handle:
         """callback(msg, sender): sender is the publishing node's name ('' where unknown). latched: hear the last
         message of latching publishers on joining. On ROS 1 a subscriber always does; on ROS 2 it asks for transient
         local, which only transient-local (latching) publishers offer: DDS leaves a latched subscription deaf to a
-        volatile publisher. Leave it False to hear every publisher."""
+        volatile publisher. Leave it False to hear every publisher. newest_only: a stream where only the newest
+        message matters (camera frames): a queue of one that a slow callback skips through (ROS 1: with a buffer
+        for a whole frame; ROS 2: best effort, which hears reliable and best-effort publishers alike)."""
+
+    def subscribers(self, topic: str) -> list[str]:
+        """The names of the nodes subscribed to `topic` now, sorted (the graph's view)."""
 
     def service(self, name: str, srv_cls: type, handler: Callable[[Any], Any]) -> Handle:
         """handler(request) -> response (see `response`)."""

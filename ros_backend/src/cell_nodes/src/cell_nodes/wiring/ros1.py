@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, List, Optional
 
+import rosgraph
 import rospy
 
 from .. import ros_publish
@@ -15,6 +16,9 @@ class _Publisher:
 
     def publish(self, msg: Any) -> bool:
         return ros_publish.publish(self.pub, msg)
+
+    def subscriber_count(self) -> int:
+        return self.pub.get_num_connections()
 
     def close(self) -> None:
         self.pub.unregister()
@@ -62,13 +66,20 @@ class Ros1Wiring:
         return _Publisher(rospy.Publisher(topic, msg_cls, latch=latch, queue_size=queue_size, tcp_nodelay=True))
 
     def subscribe(self, topic: str, msg_cls: type, callback: Callable[[Any, str], None], queue_size: int = 10,
-                  latched: bool = False) -> Closer:
+                  latched: bool = False, newest_only: bool = False) -> Closer:
         def on_message(msg: Any) -> None:
             header = getattr(msg, "_connection_header", None) or {}
             callback(msg, str(header.get("callerid", "")))
 
-        sub = rospy.Subscriber(topic, msg_cls, on_message, queue_size=queue_size)
+        if newest_only:  # rospy reads at most buff_size at once: a frame bigger than it would arrive late
+            sub = rospy.Subscriber(topic, msg_cls, on_message, queue_size=1, buff_size=1 << 25)
+        else:
+            sub = rospy.Subscriber(topic, msg_cls, on_message, queue_size=queue_size)
         return Closer(sub.unregister)
+
+    def subscribers(self, topic: str) -> list[str]:
+        _, subs, _ = rosgraph.Master(self.name).getSystemState()
+        return sorted(next((nodes for name, nodes in subs if name == topic), []))
 
     def service(self, name: str, srv_cls: type, handler: Callable[[Any], Any]) -> Closer:
         svc = rospy.Service(name, srv_cls, handler)

@@ -26,8 +26,9 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from .api import Closer, ServiceError
 
 
-def qos(depth: int, latch: bool) -> QoSProfile:
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=max(1, depth), reliability=ReliabilityPolicy.RELIABLE,
+def qos(depth: int, latch: bool, best_effort: bool = False) -> QoSProfile:
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=max(1, depth),
+                      reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL if latch else DurabilityPolicy.VOLATILE)
 
 
@@ -45,6 +46,9 @@ class _Publisher:
             if not self._wiring.ok():
                 return False
             raise
+
+    def subscriber_count(self) -> int:
+        return self.pub.get_subscription_count()
 
     def close(self) -> None:
         self._wiring.node.destroy_publisher(self.pub)
@@ -203,18 +207,23 @@ class Ros2Wiring:
         return name or ""
 
     def subscribe(self, topic: str, msg_cls: type, callback: Callable[[Any, str], None], queue_size: int = 10,
-                  latched: bool = False) -> Closer:
+                  latched: bool = False, newest_only: bool = False) -> Closer:
         def on_message(msg: Any, info: Any) -> None:
             callback(msg, self._sender(topic, info))
 
-        lane = _Lane(f"sub {topic}", queue_size, lambda item: callback(item[0], self._sender(topic, item[1])))
+        depth = 1 if newest_only else queue_size
+        lane = _Lane(f"sub {topic}", depth, lambda item: callback(item[0], self._sender(topic, item[1])))
         sub = self.node.create_subscription(msg_cls, topic, lambda msg, info: lane.put((msg, info)),
-                                            qos(queue_size, latched), callback_group=self.group)
+                                            qos(depth, latched, best_effort=newest_only), callback_group=self.group)
 
         def close() -> None:
             self.node.destroy_subscription(sub)
             lane.close()
         return Closer(close)
+
+    def subscribers(self, topic: str) -> list[str]:
+        return sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}"
+                      for i in self.node.get_subscriptions_info_by_topic(topic))
 
     def service(self, name: str, srv_cls: type, handler: Callable[[Any], Any]) -> Closer:
         executor = self._executor
